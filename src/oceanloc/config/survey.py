@@ -1,0 +1,254 @@
+"""Transponder-survey scenarios: TOML file -> validated, frozen :class:`SurveyScenario`.
+
+A scenario describes the world (transponders), the vehicle, the range sensor, the prior, the
+estimator's stopping rules, a default planner and Monte Carlo settings. The papers' scenarios ship as
+TOML files in ``oceanloc/config/scenarios`` and are addressed by name (``garcia2019-m4``)::
+
+    [scenario]
+    name = "my-survey"
+    epochs = 50                       # measurement epochs N
+
+    [vehicle]
+    start_enu_m = [-3.0, 9.0, 0.0]
+    start_yaw_deg = -30.0             # counter-clockwise from east
+    speed_mps = 3.0
+    period_s = 1.0
+    max_yaw_rate_deg_s = 30.0
+
+    [sensor]
+    sigma_range_m = 0.12
+
+    [prior]
+    sigma_enu_m = [100.0, 100.0, 2.0] # 0P_T = diag(sigma^2)
+
+    [[transponders]]
+    enu_m = [17.0, 15.0, -6.0]
+
+    [planner]                          # optional
+    kind = "lookahead"                 # random-yaw | random-disk | greedy | lookahead
+    horizon = 2                        # look-ahead steps k (lookahead)
+    max_distance_m = 5.0               # reach d_max (greedy, random-disk)
+
+    [estimator]                        # optional
+    delta_min_m = 1e-6
+    max_iterations = 50
+
+    [montecarlo]                       # optional
+    runs = 1000
+    seed = 2019
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from oceanloc._typing import PLANNER_KINDS, FloatArray, PlannerKind
+from oceanloc.config.toml_fields import Table, parse_toml, read_toml
+from oceanloc.errors import ConfigError
+from oceanloc.units import DEG
+
+_SCENARIO_PACKAGE = "oceanloc.config.scenarios"
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlannerSettings:
+    """Which measurement-site planner to run and its parameters.
+
+    Attributes
+    ----------
+    kind : {"random-yaw", "random-disk", "greedy", "lookahead"}
+        ``random-yaw``: yaw rate uniform in ``[-w_max, w_max]`` (the journal's k = 0);
+        ``random-disk``: a point uniform in the disk of radius ``max_distance_m`` (the thesis' baseline);
+        ``greedy``: D-optimal point within ``max_distance_m`` (PLANS 2018 eqs. 18-29);
+        ``lookahead``: D-optimal yaw-rate sequence over ``horizon`` steps (journal eqs. 28-40).
+    horizon : int
+        Look-ahead steps ``k``.
+    max_distance_m : float
+        Reach ``d_max`` between epochs for the point planners, metres.
+    """
+
+    kind: PlannerKind = "lookahead"
+    horizon: int = 1
+    max_distance_m: float = 5.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in PLANNER_KINDS:
+            raise ConfigError(f"planner kind must be one of {', '.join(PLANNER_KINDS)}; got '{self.kind}'")
+        if self.horizon < 1:
+            raise ConfigError(f"planner horizon must be at least 1, got {self.horizon}")
+        if not self.max_distance_m > 0:
+            raise ConfigError(f"planner max_distance_m must be positive, got {self.max_distance_m}")
+
+    @property
+    def label(self) -> str:
+        """Short label used in tables: ``k=0`` for random baselines, ``k=2`` or ``greedy``."""
+        if self.kind.startswith("random"):
+            return "k=0"
+        if self.kind == "greedy":
+            return "greedy"
+        return f"k={self.horizon}"
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class EstimatorSettings:
+    """Stopping rules of the MAP Gauss-Newton estimator (the papers' ``delta_min`` and ``J_max``)."""
+
+    delta_min_m: float = 1e-6
+    max_iterations: int = 50
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SurveyScenario:
+    """A validated transponder-survey scenario.
+
+    Attributes
+    ----------
+    name, description : str
+    transponders_enu_m : (M, 3) float
+        True transponder positions, metres (z negative below the surface).
+    start_enu_m : (3,) float
+        Vehicle position at epoch 1, metres.
+    start_yaw_rad : float
+        Vehicle heading at epoch 1, radians counter-clockwise from east.
+    speed_mps : float
+        Forward speed (body velocity ``[speed, 0, 0]``), m/s.
+    period_s : float
+        Sampling period ``T``, s.
+    max_yaw_rate_rad_s : float
+        Yaw-rate limit ``w_max``, rad/s.
+    sigma_range_m : float
+        Range noise standard deviation, metres.
+    prior_cov_m2 : (3, 3) float
+        Prior covariance ``0P_T``, square metres.
+    epochs : int
+        Number of measurement epochs ``N``.
+    planner : PlannerSettings
+    estimator : EstimatorSettings
+    runs : int
+        Default number of Monte Carlo runs.
+    seed : int
+        Default master seed.
+    """
+
+    name: str
+    description: str = ""
+    transponders_enu_m: FloatArray
+    start_enu_m: FloatArray
+    start_yaw_rad: float
+    speed_mps: float
+    period_s: float
+    max_yaw_rate_rad_s: float
+    sigma_range_m: float
+    prior_cov_m2: FloatArray
+    epochs: int
+    planner: PlannerSettings = dataclasses.field(default_factory=PlannerSettings)
+    estimator: EstimatorSettings = dataclasses.field(default_factory=EstimatorSettings)
+    runs: int = 100
+    seed: int = 0
+
+    @property
+    def n_transponders(self) -> int:
+        return int(self.transponders_enu_m.shape[0])
+
+    def with_planner(self, planner: PlannerSettings) -> SurveyScenario:
+        """The same scenario with another planner."""
+        return dataclasses.replace(self, planner=planner)
+
+
+def builtin_survey_scenarios() -> list[str]:
+    """Names of the scenarios shipped with oceanloc."""
+    files = resources.files(_SCENARIO_PACKAGE).iterdir()
+    return sorted(f.name.removesuffix(".toml") for f in files if f.name.endswith(".toml"))
+
+
+def load_survey_scenario(name_or_path: str | Path) -> SurveyScenario:
+    """Load a built-in scenario by name or a scenario TOML file by path."""
+    text_path = Path(name_or_path)
+    if text_path.suffix == ".toml" or text_path.exists():
+        return survey_scenario_from_table(read_toml(text_path))
+    name = str(name_or_path)
+    if name not in builtin_survey_scenarios():
+        raise ConfigError(
+            f"'{name}' is neither a scenario file nor a built-in scenario "
+            f"(built-in: {', '.join(builtin_survey_scenarios())})"
+        )
+    text = resources.files(_SCENARIO_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
+    return survey_scenario_from_table(parse_toml(text, source=f"{name}.toml"))
+
+
+def survey_scenario_from_table(root: Table) -> SurveyScenario:
+    """Validate a parsed scenario file; every error names the file, table and field."""
+    head = root.table("scenario")
+    name = head.str("name")
+    description = head.str("description", "")
+    epochs = head.int("epochs", lo=1, hi=100_000)
+    head.check_unknown()
+
+    veh = root.table("vehicle")
+    start = veh.vector("start_enu_m", 3)
+    start_yaw = veh.float("start_yaw_deg", 0.0, lo=-360.0, hi=360.0) * DEG
+    speed = veh.float("speed_mps", 3.0, lo=0.0, lo_open=True, hi=100.0)
+    period = veh.float("period_s", 1.0, lo=0.0, lo_open=True, hi=3600.0)
+    w_max = veh.float("max_yaw_rate_deg_s", 30.0, lo=0.0, lo_open=True, hi=3600.0) * DEG
+    veh.check_unknown()
+
+    sensor = root.table("sensor")
+    sigma = sensor.float("sigma_range_m", lo=0.0, lo_open=True, hi=1e4)
+    sensor.check_unknown()
+
+    prior = root.table("prior")
+    prior_sigma = prior.vector("sigma_enu_m", 3, positive=True)
+    prior.check_unknown()
+
+    tables = root.tables("transponders", min_count=1)
+    positions = []
+    for t in tables:
+        pos = t.vector("enu_m", 3)
+        if pos[2] >= 0.0:
+            raise t.error("enu_m", f"transponders lie below the surface (z < 0), got z = {pos[2]}")
+        positions.append(pos)
+        t.check_unknown()
+
+    plan_t = root.table("planner", required=False)
+    planner = PlannerSettings(
+        kind=plan_t.str("kind", "lookahead", choices=PLANNER_KINDS),  # type: ignore[arg-type]
+        horizon=plan_t.int("horizon", 1, lo=1, hi=10),
+        max_distance_m=plan_t.float("max_distance_m", 5.0, lo=0.0, lo_open=True),
+    )
+    plan_t.check_unknown()
+
+    est_t = root.table("estimator", required=False)
+    estimator = EstimatorSettings(
+        delta_min_m=est_t.float("delta_min_m", 1e-6, lo=0.0, lo_open=True),
+        max_iterations=est_t.int("max_iterations", 50, lo=1, hi=10_000),
+    )
+    est_t.check_unknown()
+
+    mc = root.table("montecarlo", required=False)
+    runs = mc.int("runs", 100, lo=1, hi=10_000_000)
+    seed = mc.int("seed", 0, lo=0)
+    mc.check_unknown()
+    root.check_unknown()
+
+    return SurveyScenario(
+        name=name,
+        description=description,
+        transponders_enu_m=np.array(positions),
+        start_enu_m=start,
+        start_yaw_rad=start_yaw,
+        speed_mps=speed,
+        period_s=period,
+        max_yaw_rate_rad_s=w_max,
+        sigma_range_m=sigma,
+        prior_cov_m2=np.diag(prior_sigma**2),
+        epochs=epochs,
+        planner=planner,
+        estimator=estimator,
+        runs=runs,
+        seed=seed,
+    )

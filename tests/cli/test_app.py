@@ -1,0 +1,31 @@
+import click
+import pytest
+import typer.main
+from typer.testing import CliRunner
+
+from oceanloc.cli.app import app, main
+
+
+def _all_commands(cmd: click.Command, prefix: tuple[str, ...] = ()):
+    yield prefix
+    if isinstance(cmd, click.Group):
+        for name, sub in cmd.commands.items():
+            yield from _all_commands(sub, (*prefix, name))
+
+
+COMMANDS = list(_all_commands(typer.main.get_command(app)))
+
+
+@pytest.mark.parametrize("path", COMMANDS, ids=[" ".join(p) or "oceanloc" for p in COMMANDS])
+def test_every_command_has_help(path):
+    result = CliRunner().invoke(app, [*path, "--help"])
+    assert result.exit_code == 0, result.output
+    assert "Usage" in result.output
+
+
+def test_user_error_is_one_line_without_traceback(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["scenarios", "show", "no-such-scenario"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "error:" in err and "Traceback" not in err

@@ -1,0 +1,93 @@
+import numpy as np
+import pytest
+
+from oceanloc.config.survey import builtin_survey_scenarios, load_survey_scenario
+from oceanloc.errors import ConfigError
+from oceanloc.units import DEG
+
+GOOD = """
+[scenario]
+name = "t"
+epochs = 10
+[vehicle]
+start_enu_m = [0.0, 0.0, 0.0]
+start_yaw_deg = 45.0
+[sensor]
+sigma_range_m = 0.1
+[prior]
+sigma_enu_m = [10.0, 10.0, 1.0]
+[[transponders]]
+enu_m = [1.0, 2.0, -3.0]
+"""
+
+
+def _write(tmp_path, text):
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    return p
+
+
+def test_builtin_scenarios_match_journal_tables():
+    assert set(builtin_survey_scenarios()) >= {
+        "garcia2019-m1",
+        "garcia2019-m4",
+        "garcia2018-greedy-m1",
+        "garcia2018-greedy-m4",
+    }
+    s = load_survey_scenario("garcia2019-m4")
+    np.testing.assert_array_equal(s.transponders_enu_m[1], [-2.0, -1.0, -7.0])
+    np.testing.assert_array_equal(s.prior_cov_m2, np.diag([1e4, 1e4, 4.0]))
+    assert s.start_yaw_rad == pytest.approx(-30 * DEG)
+    assert s.max_yaw_rate_rad_s == pytest.approx(30 * DEG)
+    assert (s.sigma_range_m, s.epochs, s.speed_mps) == (0.12, 50, 3.0)
+
+
+def test_minimal_file_gets_defaults(tmp_path):
+    s = load_survey_scenario(_write(tmp_path, GOOD))
+    assert s.planner.kind == "lookahead" and s.planner.horizon == 1
+    assert s.start_yaw_rad == pytest.approx(45 * DEG)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "sigma_range_m = 0.1",
+            "sigma_range_m = -0.1",
+            r"\[sensor\] field 'sigma_range_m': must be > 0",
+        ),
+        ("epochs = 10", "epochs = 'ten'", r"field 'epochs': must be an integer"),
+        (
+            "enu_m = [1.0, 2.0, -3.0]",
+            "enu_m = [1.0, 2.0, 3.0]",
+            r"\[transponders\[0\]\] field 'enu_m': transponders lie below",
+        ),
+        ("enu_m = [1.0, 2.0, -3.0]", "enu_m = [1.0, 2.0]", "must have 3 numbers"),
+        (
+            "start_yaw_deg = 45.0",
+            "start_yaw_deg = 45.0\nsped_mps = 3.0",
+            "field 'sped_mps': unknown field",
+        ),
+        (
+            "sigma_enu_m = [10.0, 10.0, 1.0]",
+            "sigma_enu_m = [10.0, 0.0, 1.0]",
+            "must hold positive numbers",
+        ),
+        ("[[transponders]]\nenu_m = [1.0, 2.0, -3.0]", "", "field 'transponders': is required"),
+        ("epochs = 10", "epochs = 10\n[planner]\nkind = 'best'", "must be one of random-yaw"),
+    ],
+)
+def test_validation_names_file_table_and_field(tmp_path, old, new, message):
+    path = _write(tmp_path, GOOD.replace(old, new))
+    with pytest.raises(ConfigError, match=message) as info:
+        load_survey_scenario(path)
+    assert str(path) in str(info.value)
+
+
+def test_malformed_toml_and_missing_file(tmp_path):
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        load_survey_scenario(_write(tmp_path, "[scenario\nname="))
+    with pytest.raises(ConfigError, match="file not found"):
+        load_survey_scenario(tmp_path / "nope.toml")
+    with pytest.raises(ConfigError, match="neither a scenario file nor a built-in"):
+        load_survey_scenario("no-such-scenario")
