@@ -13,6 +13,7 @@ import click
 import typer
 
 from oceanloc import __version__
+from oceanloc.cli import reproduce, simulate
 from oceanloc.cli import scenarios as scenarios_cmd
 from oceanloc.cli._common import err_console
 from oceanloc.errors import OceanlocError
@@ -25,6 +26,11 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(scenarios_cmd.app, name="scenarios")
+app.add_typer(reproduce.app, name="reproduce")
+app.add_typer(simulate.app, name="simulate")
+
+# Command modules register their commands on a group (or on ``app``) when imported; one line each.
+from oceanloc.cli import commands  # noqa: E402, F401
 
 
 def _version(value: bool) -> None:
