@@ -1,6 +1,6 @@
-"""Imports every command module so that each registers its commands on its group.
+"""Imports every command module so that each registers its commands on the root app or a group.
 
-One import per capability; keep them in alphabetical order to make merges trivial.
+One import per module; keep them sorted so that merges stay trivial.
 """
 
 from __future__ import annotations
