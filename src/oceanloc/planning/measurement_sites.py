@@ -1,0 +1,307 @@
+"""Where to measure next: D-optimal measurement-site planners and random baselines.
+
+All planners share one shape (OMPL's lesson: a problem, a planner, ``plan(...) -> PlanResult``) and are
+batched: ``B`` independent planning problems (Monte Carlo runs) are solved in one call.
+
+* :class:`LookaheadPlanner` - multi-step look-ahead over yaw rates (Garcia et al. 2019, eqs. 28-40):
+  choose ``omega_1..omega_k`` in ``[-w_max, w_max]^k`` to maximize the information gain of the ``k`` sites
+  they lead to through the unicycle model (eq. 1), linearized about the current estimates, summed over all
+  transponders; receding horizon: only ``omega_1`` is applied.
+* :class:`GreedyPlanner` - single step within a reach (PLANS 2018 eqs. 18-29, thesis Section 5.2):
+  maximize ``sum_m log(1 + alpha_m(x))`` over surface points ``x`` within ``d_max`` of the vehicle.
+* :class:`RandomYawPlanner` - a yaw rate uniform in ``[-w_max, w_max]`` (the journal's "k = 0").
+* :class:`RandomDiskPlanner` - a point uniform in the disk of radius ``d_max`` (the thesis' baseline).
+
+The optimizing planners find the global optimum of their planning problem (see
+:mod:`oceanloc.planning.box_search`); the objective reported is the gain in nats,
+``sum_m log det Y_{N+k}^m - log det Y_N^m``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Protocol
+
+import numpy as np
+
+from oceanloc._random import BatchRng, uniform
+from oceanloc._typing import FloatArray, IntArray
+from oceanloc.errors import ConfigError
+from oceanloc.models.vehicles import unicycle_rollout
+from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
+from oceanloc.planning.information import information_gain, scaled_cholesky
+
+
+class PlanStatus(Enum):
+    """Outcome of a planner call (OMPL's vocabulary)."""
+
+    EXACT = "exact"
+    """The planning problem was solved as posed (for the optimizers: the global optimum to tolerance)."""
+    APPROXIMATE = "approximate"
+    """A usable plan that does not meet the request exactly."""
+    FAILED = "failed"
+    """No plan."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlanningState:
+    """What a measurement-site planner knows at epoch ``N``, for ``B`` problems.
+
+    Attributes
+    ----------
+    pos_enu_m : (B, 3) float
+        Vehicle positions, metres.
+    yaw_rad : (B,) float
+        Vehicle headings, radians counter-clockwise from east.
+    estimates_m : (B, M, 3) float
+        Current transponder estimates, metres.
+    covariances_m2 : (B, M, 3, 3) float
+        Their covariances (inverse information ``Y_N^m``, prior included), square metres.
+    """
+
+    pos_enu_m: FloatArray
+    yaw_rad: FloatArray
+    estimates_m: FloatArray
+    covariances_m2: FloatArray
+
+    @property
+    def batch(self) -> int:
+        return int(self.pos_enu_m.shape[0])
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlanResult:
+    """A batch of plans.
+
+    Attributes
+    ----------
+    next_pos_enu_m : (B, 3) float
+        Where the vehicle measures next (epoch ``N + 1``), metres.
+    next_yaw_rad : (B,) float
+        Heading on arrival, radians.
+    waypoints_enu_m : (B, k, 3) float
+        All planned sites ``N+1 .. N+k`` (``k = 1`` for single-step planners), metres.
+    yaw_rates_rad_s : (B, k) float or None
+        Planned yaw-rate sequence (yaw-rate planners); only the first is applied (receding horizon).
+    objective : (B,) float
+        Information gain of the planned sites, ``sum_m log det Y_{N+k}^m - log det Y_N^m``, nats.
+    solve_time_s : float
+        Wall time of the whole batched call, seconds.
+    status : PlanStatus
+    """
+
+    next_pos_enu_m: FloatArray
+    next_yaw_rad: FloatArray
+    waypoints_enu_m: FloatArray
+    yaw_rates_rad_s: FloatArray | None
+    objective: FloatArray
+    solve_time_s: float
+    status: PlanStatus = PlanStatus.EXACT
+
+
+class MeasurementSitePlanner(Protocol):
+    """Anything with ``plan(state, rng) -> PlanResult``."""
+
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult: ...
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class LookaheadPlanner:
+    """Multi-step look-ahead D-optimal planner over yaw-rate sequences (journal eqs. 28-40).
+
+    Attributes
+    ----------
+    horizon : int
+        Look-ahead steps ``k``.
+    max_yaw_rate_rad_s : float
+        ``w_max``; each yaw rate lies in ``[-w_max, w_max]``.
+    speed_mps : float
+        Forward speed (body velocity ``[speed, 0, 0]``).
+    period_s : float
+        Sampling period ``T``.
+    sigma_range_m : float
+        Range noise standard deviation.
+    search : BoxSearchOptions
+        Global search settings; the defaults reach the exhaustive-search optimum on the papers' problems.
+    """
+
+    horizon: int
+    max_yaw_rate_rad_s: float
+    speed_mps: float
+    period_s: float
+    sigma_range_m: float
+    search: BoxSearchOptions = field(default_factory=BoxSearchOptions)
+
+    def __post_init__(self) -> None:
+        if self.horizon < 1:
+            raise ConfigError(f"horizon must be at least 1, got {self.horizon}")
+        for name in ("max_yaw_rate_rad_s", "speed_mps", "period_s", "sigma_range_m"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"{name} must be positive, got {getattr(self, name)}")
+
+    def bounds(self) -> tuple[FloatArray, FloatArray]:
+        """Bounds of the decision box, as ``(lower (k,), upper (k,))``."""
+        bound = np.full(self.horizon, self.max_yaw_rate_rad_s)
+        return -bound, bound
+
+    def gain(self, state: PlanningState, yaw_rates_rad_s: FloatArray) -> FloatArray:
+        """Information gain of yaw-rate sequences ``(B, C, k)`` -> ``(B, C)``."""
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
+        return self._gain(state, chol, yaw_rates_rad_s, np.arange(state.batch))
+
+    def _gain(self, state: PlanningState, chol: FloatArray, rates: FloatArray, rows: IntArray) -> FloatArray:
+        poses = unicycle_rollout(
+            state.pos_enu_m[rows, None, :], state.yaw_rad[rows, None], rates, self.speed_mps, self.period_s
+        )
+        return information_gain(poses.pos_enu_m, state.estimates_m[rows, None], chol[rows])
+
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+        """The D-optimal yaw-rate sequence for each problem (``rng`` is not used)."""
+        start = time.perf_counter()
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
+        lower, upper = self.bounds()
+        best = maximize_in_box(
+            lambda w, rows: self._gain(state, chol, w, rows), lower, upper, state.batch, options=self.search
+        )
+        poses = unicycle_rollout(state.pos_enu_m, state.yaw_rad, best.x, self.speed_mps, self.period_s)
+        return PlanResult(
+            next_pos_enu_m=poses.pos_enu_m[:, 0],
+            next_yaw_rad=poses.yaw_rad[:, 0],
+            waypoints_enu_m=poses.pos_enu_m,
+            yaw_rates_rad_s=best.x,
+            objective=best.value,
+            solve_time_s=time.perf_counter() - start,
+        )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GreedyPlanner:
+    """Greedy D-optimal point within a reach (PLANS 2018 eqs. 18-29; thesis Section 5.2).
+
+    The decision is a surface point ``x = p + rho [cos theta, sin theta, 0]`` with ``0 <= rho <= d_max``;
+    the box search works in these polar coordinates (``theta`` periodic), so the reach constraint is a
+    bound and boundary optima (the usual case) are found exactly.
+
+    Attributes
+    ----------
+    max_distance_m : float
+        Reach ``d_max`` between epochs.
+    sigma_range_m : float
+        Range noise standard deviation.
+    search : BoxSearchOptions
+    """
+
+    max_distance_m: float
+    sigma_range_m: float
+    search: BoxSearchOptions = field(default_factory=lambda: BoxSearchOptions(grid_points=24, starts=4))
+
+    def __post_init__(self) -> None:
+        if not (self.max_distance_m > 0 and self.sigma_range_m > 0):
+            raise ConfigError("max_distance_m and sigma_range_m must be positive")
+
+    def sites(self, state: PlanningState, polar: FloatArray, rows: IntArray | None = None) -> FloatArray:
+        """Surface points ``(b, C, 1, 3)`` for polar decisions ``(b, C, 2)`` = ``(rho, theta)``."""
+        rho, theta = polar[..., 0], polar[..., 1]
+        base = state.pos_enu_m[:, None, :] if rows is None else state.pos_enu_m[rows, None, :]
+        pts = np.stack(
+            [
+                base[..., 0] + rho * np.cos(theta),
+                base[..., 1] + rho * np.sin(theta),
+                base[..., 2] + 0.0 * rho,
+            ],
+            -1,
+        )
+        return pts[..., None, :]
+
+    def gain(self, state: PlanningState, points_enu_m: FloatArray) -> FloatArray:
+        """Information gain of measuring at surface points ``(B, C, 3)`` -> ``(B, C)``."""
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
+        return information_gain(points_enu_m[..., None, :], state.estimates_m[:, None], chol)
+
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+        """The D-optimal point within reach for each problem (``rng`` is not used)."""
+        start = time.perf_counter()
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
+        est = state.estimates_m[:, None]
+        best = maximize_in_box(
+            lambda x, rows: information_gain(self.sites(state, x, rows), est[rows], chol[rows]),
+            [0.0, -np.pi],
+            [self.max_distance_m, np.pi],
+            state.batch,
+            periodic=[False, True],
+            options=self.search,
+        )
+        site = self.sites(state, best.x[:, None, :])[:, 0, 0]
+        return PlanResult(
+            next_pos_enu_m=site,
+            next_yaw_rad=_heading_to(state, site),
+            waypoints_enu_m=site[:, None, :],
+            yaw_rates_rad_s=None,
+            objective=best.value,
+            solve_time_s=time.perf_counter() - start,
+        )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RandomYawPlanner:
+    """Random baseline of the journal (k = 0): a yaw rate uniform in ``[-w_max, w_max]``."""
+
+    max_yaw_rate_rad_s: float
+    speed_mps: float
+    period_s: float
+    sigma_range_m: float
+
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+        """Draw one yaw rate per problem from ``rng`` (one generator, or one per problem)."""
+        if rng is None:
+            raise ConfigError("the random planner needs a random generator")
+        start = time.perf_counter()
+        rates = (2.0 * uniform(rng, state.batch, (1,)) - 1.0) * self.max_yaw_rate_rad_s
+        poses = unicycle_rollout(state.pos_enu_m, state.yaw_rad, rates, self.speed_mps, self.period_s)
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)
+        gain = information_gain(poses.pos_enu_m, state.estimates_m, chol)
+        return PlanResult(
+            next_pos_enu_m=poses.pos_enu_m[:, 0],
+            next_yaw_rad=poses.yaw_rad[:, 0],
+            waypoints_enu_m=poses.pos_enu_m,
+            yaw_rates_rad_s=rates,
+            objective=gain,
+            solve_time_s=time.perf_counter() - start,
+        )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RandomDiskPlanner:
+    """Random baseline of the thesis: a point uniform in the disk of radius ``d_max`` around the vehicle."""
+
+    max_distance_m: float
+    sigma_range_m: float
+
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+        """Draw one point per problem from ``rng`` (one generator, or one per problem)."""
+        if rng is None:
+            raise ConfigError("the random planner needs a random generator")
+        start = time.perf_counter()
+        u = uniform(rng, state.batch, (2,))
+        rho = self.max_distance_m * np.sqrt(u[:, 0])
+        theta = 2.0 * np.pi * u[:, 1]
+        site = state.pos_enu_m + np.stack([rho * np.cos(theta), rho * np.sin(theta), 0.0 * rho], -1)
+        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)
+        gain = information_gain(site[:, None, :], state.estimates_m, chol)
+        return PlanResult(
+            next_pos_enu_m=site,
+            next_yaw_rad=_heading_to(state, site),
+            waypoints_enu_m=site[:, None, :],
+            yaw_rates_rad_s=None,
+            objective=gain,
+            solve_time_s=time.perf_counter() - start,
+        )
+
+
+def _heading_to(state: PlanningState, site: FloatArray) -> FloatArray:
+    """Heading of the move to ``site``; the current heading where the vehicle stays put."""
+    step = site - state.pos_enu_m
+    moved = np.hypot(step[:, 0], step[:, 1]) > 1e-12
+    return np.where(moved, np.arctan2(step[:, 1], step[:, 0]), state.yaw_rad)

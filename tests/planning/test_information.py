@@ -1,0 +1,43 @@
+import numpy as np
+import pytest
+
+from oceanloc.planning.information import (
+    information_gain,
+    information_gain_reference,
+    log_det_information,
+    scaled_cholesky,
+)
+from tests.planning.problems import random_planning_states
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4])
+@pytest.mark.parametrize("m", [1, 4])
+def test_fast_gain_equals_eq29_log_det(k, m):
+    rng = np.random.default_rng(k * 10 + m)
+    st = random_planning_states(rng, 5, m)
+    sites = np.column_stack([rng.uniform(-20, 20, (k, 2)), np.zeros(k)])
+    chol = scaled_cholesky(st.covariances_m2, 0.12)
+    fast = information_gain(np.broadcast_to(sites, (5, k, 3)), st.estimates_m, chol)
+    for b in range(5):
+        ref = information_gain_reference(sites, st.estimates_m[b], st.covariances_m2[b], 0.12)
+        assert fast[b] == pytest.approx(ref, rel=1e-9, abs=1e-9)
+
+
+def test_single_step_gain_is_log_one_plus_alpha_with_sigma():
+    # Conference eq. (25) with the sigma^-2 the journal's eq. (37) omits: alpha = h P h^T / sigma^2.
+    cov = np.diag([4.0, 1.0, 0.25])
+    est = np.array([10.0, 0.0, -5.0])
+    site = np.zeros(3)
+    h = (est - site) / np.linalg.norm(est - site)
+    alpha = h @ cov @ h / 0.1**2
+    gain = information_gain(site[None, :], est[None, :], scaled_cholesky(cov[None], 0.1))
+    assert gain == pytest.approx(np.log1p(alpha), rel=1e-12)
+
+
+def test_block_diagonal_log_det_is_sum_over_transponders():
+    rng = np.random.default_rng(0)
+    blocks = [np.linalg.inv(c) for c in random_planning_states(rng, 1, 4).covariances_m2[0]]
+    full = np.zeros((12, 12))
+    for i, b in enumerate(blocks):
+        full[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b
+    assert log_det_information(np.array(blocks)).sum() == pytest.approx(np.linalg.slogdet(full)[1], rel=1e-12)
