@@ -7,6 +7,8 @@ batch dimensions (runs, transponders, measurements, sigma points); they never mu
 
 from __future__ import annotations
 
+from typing import Literal, TypeAlias
+
 import numpy as np
 
 from oceanloc._random import BatchRng, standard_normal
@@ -83,6 +85,11 @@ def simulate_ranges(
 # components are the horizontal position (a 2-vector position, the 4-state CV or the 6-state CA state); the
 # Jacobian has one column per state component, zero beyond the position. Sensors are broadcast against the
 # target's leading dimensions: ``target (..., d)`` with ``sensors_m (..., N, 2)`` gives ``(..., N)``.
+
+
+MeasurementKind: TypeAlias = Literal["bearing", "range", "tdoa"]
+"""Flock measurement types: bearing (II.3), horizontal range (II.4), time difference of arrival (II.7)."""
+MEASUREMENT_KINDS: tuple[str, ...] = ("bearing", "range", "tdoa")
 
 
 def wrap_angle_rad(angle_rad: ArrayLike) -> FloatArray:

@@ -13,22 +13,20 @@ of sight parallel, fewer independent measurements than two) give ``inf``.
 
 from __future__ import annotations
 
-from typing import Literal, TypeAlias
-
 import numpy as np
 
 from oceanloc._typing import ArrayLike, FloatArray
+from oceanloc.estimation.bounds import hdop_from_jacobian
 from oceanloc.models.measurements import (
+    MEASUREMENT_KINDS,
+    MeasurementKind,
     bearing_jacobian,
     horizontal_range_jacobian,
     sensor_pairs,
     tdoa_jacobian,
 )
 
-MeasurementKind: TypeAlias = Literal["bearing", "range", "tdoa"]
-MEASUREMENT_KINDS: tuple[str, ...] = ("bearing", "range", "tdoa")
-
-_SINGULAR_RTOL = 1e-12
+__all__ = ["MEASUREMENT_KINDS", "MeasurementKind", "hdop", "hdop_from_jacobian", "position_jacobian"]
 
 
 def position_jacobian(
@@ -70,35 +68,6 @@ def position_jacobian(
         p = sensor_pairs(nodes.shape[-2]) if pairs is None else pairs
         return tdoa_jacobian(target, nodes, p, sound_speed_mps)
     raise ValueError(f"measurement kind must be one of {', '.join(MEASUREMENT_KINDS)}; got {kind!r}")
-
-
-def hdop_from_jacobian(jacobian: ArrayLike, sigma: ArrayLike = 1.0) -> FloatArray:
-    """``sqrt(trace((H^T R^-1 H)^-1))`` for ``R = diag(sigma^2)``, eq. (IV.9), in closed form for 2-D.
-
-    Parameters
-    ----------
-    jacobian : (..., m, 2) float
-        Rows ``h_i``.
-    sigma : float or (..., m) float
-        Measurement standard deviations; a row with ``sigma = inf`` contributes nothing (a missing node).
-
-    Returns
-    -------
-    (...) float
-        HDOP; ``inf`` where the information matrix is singular.
-    """
-    h = np.asarray(jacobian, dtype=float)
-    w = 1.0 / np.square(np.asarray(sigma, dtype=float))
-    w = np.broadcast_to(w, h.shape[:-1])
-    g00 = np.sum(w * h[..., 0] ** 2, axis=-1)
-    g11 = np.sum(w * h[..., 1] ** 2, axis=-1)
-    g01 = np.sum(w * h[..., 0] * h[..., 1], axis=-1)
-    tr = g00 + g11
-    det = g00 * g11 - g01 * g01
-    ok = det > _SINGULAR_RTOL * tr * tr
-    out = np.full(tr.shape, np.inf)
-    np.divide(tr, det, out=out, where=ok)
-    return np.sqrt(out)
 
 
 def hdop(
