@@ -29,7 +29,7 @@ def test_nees_and_nis_match_chi_square(kind, sigma, filt):
 
 
 def test_dropouts_keep_consistency_and_count_dof():
-    motion, model, init, truth, z = consistent_bearing_problem(RUNS, EPOCHS, seed=7)
+    motion, model, init, _truth, z = consistent_bearing_problem(RUNS, EPOCHS, seed=7)
     rng = np.random.default_rng(0)
     z = np.where(rng.random(z.shape) < 0.3, np.nan, z)  # each node misses 30% of epochs
     res = run_filter("ukf", init, motion, model, z, np.broadcast_to(SENSORS, (EPOCHS, 4, 2)))
