@@ -131,20 +131,22 @@ def linear_update(
     avail: BoolArray,
 ) -> UpdateResult:
     """Kalman update given the innovation ``nu (B, m)`` and ``H (B, m, n)``; Joseph-form covariance."""
-    h = np.where(avail[..., None], jacobian, 0.0)
+    h = jacobian if avail.all() else np.where(avail[..., None], jacobian, 0.0)
     r = masked_noise(noise_cov, avail)
     p = state.cov
     hp = h @ p
     s = symmetrize(hp @ np.swapaxes(h, -1, -2) + r)
-    k = np.swapaxes(np.linalg.solve(s, hp), -1, -2)
-    mean = state.mean + np.einsum("bij,bj->bi", k, nu)
+    # One solve for the gain and the NIS: S^-1 [H P | nu].
+    sol = np.linalg.solve(s, np.concatenate([hp, nu[..., None]], axis=-1))
+    k = np.swapaxes(sol[..., :-1], -1, -2)
+    mean = state.mean + (k @ nu[..., None])[..., 0]
     a = np.eye(state.dim) - k @ h
     cov = a @ p @ np.swapaxes(a, -1, -2) + k @ r @ np.swapaxes(k, -1, -2)
     return UpdateResult(
         state=Gaussian(mean=mean, cov=symmetrize(cov)),
         innovation=nu,
         innovation_cov=s,
-        nis=nis_of(nu, s),
+        nis=np.sum(nu * sol[..., -1], axis=-1),
         dof=avail.sum(axis=-1),
         repaired=np.zeros(state.batch_size, dtype=bool),
     )

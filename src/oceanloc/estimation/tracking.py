@@ -300,7 +300,6 @@ def run_filter(
     innov = np.empty((b, t_count, m))
     nis = np.empty((b, t_count))
     dof = np.empty((b, t_count), dtype=np.int64)
-    hd = np.empty((b, t_count))
     rep = np.empty((b, t_count), dtype=bool)
     state = initial
     for k in range(t_count):
@@ -314,7 +313,8 @@ def run_filter(
         nis[:, k] = res.nis
         dof[:, k] = res.dof
         rep[:, k] = res.repaired
-        hd[:, k] = sensor_model.hdop(state.mean, sk, np.isfinite(z[:, k]))
+    # HDOP at every posterior estimate in one vectorized pass.
+    hd = sensor_model.hdop(est, sens, np.isfinite(z))
     return TrackResult(
         filter=kind,
         estimates=est,

@@ -122,20 +122,21 @@ def weighted_mean(points: FloatArray, wm: FloatArray, angle_mask: ArrayLike | No
     ref = points[:, 0, :]
     dev = points - ref[:, None, :]
     if angle_mask is not None:
-        am = np.asarray(angle_mask, dtype=bool)
-        dev = np.where(am, wrap_angle_rad(dev), dev)
-        mean = ref + wm @ dev
-        return np.where(am, wrap_angle_rad(mean), mean)
+        return _wrap_where(ref + wm @ _wrap_where(dev, angle_mask), angle_mask)
     return ref + wm @ dev
 
 
 def deviations(points: FloatArray, mean: FloatArray, angle_mask: ArrayLike | None = None) -> FloatArray:
     """``points - mean`` ``(B, S, d)``, angle components wrapped."""
     dev = points - mean[:, None, :]
-    if angle_mask is not None:
-        am = np.asarray(angle_mask, dtype=bool)
-        dev = np.where(am, wrap_angle_rad(dev), dev)
-    return dev
+    return dev if angle_mask is None else _wrap_where(dev, angle_mask)
+
+
+def _wrap_where(values: FloatArray, angle_mask: ArrayLike) -> FloatArray:
+    am = np.asarray(angle_mask, dtype=bool)
+    if am.all():
+        return wrap_angle_rad(values)
+    return np.where(am, wrap_angle_rad(values), values) if am.any() else values
 
 
 def weighted_outer(weights: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:

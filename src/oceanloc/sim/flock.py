@@ -19,6 +19,7 @@ import numpy as np
 
 from oceanloc._random import BatchRng, standard_normal, uniform
 from oceanloc._typing import ArrayLike, FloatArray
+from oceanloc.config.flock import FlockScenario
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.tracking import FlockSensorModel
 from oceanloc.models.measurements import wrap_angle_rad
@@ -186,3 +187,52 @@ def simulate_measurements(
     if dropout_probability > 0:
         z = np.where(uniform(rng, batch, clean.shape[1:]) < dropout_probability, np.nan, z)
     return z
+
+
+def scenario_nodes(scenario: FlockScenario, times_s: ArrayLike) -> FloatArray:
+    """Node positions of a scenario at the given times, ``(T, N, 2)``."""
+    t = np.asarray(times_s, dtype=float)
+    nodes = scenario.nodes
+    if nodes.layout == "ring":
+        return ring_drift_nodes(
+            t,
+            nodes.count,
+            nodes.radius_m,
+            nodes.drift_speed_mps,
+            center_m=nodes.center_m,
+            phase_rad=nodes.phase_rad,
+        )
+    if nodes.layout == "y":
+        fixed = y_nodes(nodes.radius_m, center_m=nodes.center_m, heading_rad=nodes.phase_rad)
+    else:
+        assert nodes.positions_m is not None
+        fixed = nodes.positions_m
+    return np.broadcast_to(fixed, (t.size, *fixed.shape)).copy()
+
+
+def scenario_truth(scenario: FlockScenario, times_s: ArrayLike, rng: BatchRng, runs: int) -> FloatArray:
+    """True 6-state trajectories: ``(T, 6)`` shared by all runs (straight) or ``(runs, T, 6)``."""
+    t = np.asarray(times_s, dtype=float)
+    target = scenario.target
+    if target.motion == "straight":
+        return straight_target(t, target.start_m, target.velocity_mps)
+    return stop_and_go_target(
+        t,
+        target.start_m,
+        rng,
+        runs,
+        half_width_m=target.half_width_m,
+        speed_mps=target.speed_mps,
+        mean_pause_s=target.mean_pause_s,
+    )
+
+
+def scenario_sensor_model(scenario: FlockScenario) -> FlockSensorModel:
+    """The filters' measurement model: the scenario's kind, pairs and sound speed with ``R = sigma^2 I``."""
+    return FlockSensorModel.build(
+        scenario.kind,
+        scenario.nodes.count,
+        scenario.filters.measurement_sigma,
+        pairs=scenario.pairs,
+        sound_speed_mps=scenario.sound_speed_mps,
+    )
