@@ -72,3 +72,93 @@ def test_broadcast_grid_of_candidate_positions():
 def test_unknown_kind():
     with pytest.raises(ValueError, match="bearing, range, tdoa"):
         hdop(_ring(3, 1.0), [0, 0], "doppler")
+
+
+def test_map_grid_matches_pointwise_hdop_and_netcdf_round_trip(tmp_path):
+    import xarray as xr
+
+    from oceanloc.planning.dop import hdop_map
+
+    fixed = np.array([[100.0, 0.0], [0.0, 100.0]])
+    m = hdop_map(fixed, [0.0, 0.0], "tdoa", x_range_m=(-200, 200), y_range_m=(-100, 150), resolution_m=50)
+    np.testing.assert_allclose(m.x_m, np.arange(-200, 201, 50))
+    np.testing.assert_allclose(m.y_m, np.arange(-100, 151, 50))
+    i, j = 3, 1  # y = 50, x = -150
+    ref = hdop(np.vstack([fixed, [[-150.0, 50.0]]]), [0.0, 0.0], "tdoa")
+    assert m.hdop[i, j] == pytest.approx(ref)
+    # The moving node on node 1's line of bearing beyond it (x > 0, y = 0) is singular (Fig. 32).
+    assert np.isinf(m.hdop[2, 7]) and m.y_m[2] == 0 and m.x_m[7] == 150
+    path = tmp_path / "map.nc"
+    m.to_dataset().to_netcdf(path, engine="netcdf4")
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        np.testing.assert_allclose(ds["hdop"].values[i, j], ref)
+        assert np.isnan(ds["hdop"].values[2, 7])
+        assert ds.attrs["measurement"] == "tdoa"
+
+
+def test_map_rejects_bad_grids():
+    from oceanloc.errors import ConfigError
+    from oceanloc.planning.dop import hdop_map
+
+    with pytest.raises(ConfigError, match="resolution"):
+        hdop_map([[1.0, 0.0]], [0, 0], "range", x_range_m=(0, 1), y_range_m=(0, 1), resolution_m=0)
+    with pytest.raises(ConfigError, match="x range"):
+        hdop_map([[1.0, 0.0]], [0, 0], "range", x_range_m=(1, 0), y_range_m=(0, 1), resolution_m=0.1)
+
+
+def test_placement_matches_exhaustive_search_on_small_problems():
+    # Three bearing nodes and one TDOA node added to two fixed ones: an exhaustive grid over ranges and
+    # bearings (node 1 fixed at bearing 0 by symmetry for the free problem) cannot beat the optimizer.
+    from oceanloc.planning.dop import optimize_placement
+
+    rng = np.random.default_rng(0)
+    res = optimize_placement(3, "bearing", min_standoff_m=20, max_standoff_m=200, rng=rng, starts=6)
+    r = np.linspace(20, 200, 7)
+    a = np.radians(np.arange(0, 360, 10))
+    r1, r2, r3, a2, a3 = np.meshgrid(r, r, r, a, a, indexing="ij", sparse=False)
+    nodes = np.stack(
+        [
+            np.stack([r1, np.zeros_like(r1)], -1),
+            np.stack([r2 * np.cos(a2), r2 * np.sin(a2)], -1),
+            np.stack([r3 * np.cos(a3), r3 * np.sin(a3)], -1),
+        ],
+        axis=-2,
+    )
+    exhaustive = hdop(nodes, np.zeros(2), "bearing").min()
+    assert res.hdop <= exhaustive * (1 + 1e-9)
+    assert res.hdop == pytest.approx(2 * 20 / np.sqrt(3), rel=1e-6)  # the even ring at the minimum stand-off
+    assert np.all(np.linalg.norm(res.nodes_m, axis=1) >= 20 - 1e-9)
+
+    fixed = np.array([[100.0, 0.0], [0.0, 150.0]])
+    one = optimize_placement(
+        1, "tdoa", fixed_nodes_m=fixed, min_standoff_m=50, max_standoff_m=300, rng=rng, starts=4
+    )
+    ang = np.radians(np.arange(0, 360, 0.5))
+    cand = np.stack([50 * np.cos(ang), 50 * np.sin(ang)], -1)
+    grid = hdop(
+        np.concatenate([np.broadcast_to(fixed, (ang.size, 2, 2)), cand[:, None]], axis=1), [0, 0], "tdoa"
+    )
+    assert one.hdop <= grid.min() * (1 + 1e-9)
+    assert one.gap >= -1e-12
+
+
+def test_placement_reports_ring_gap_and_validates():
+    from oceanloc.errors import ConfigError
+    from oceanloc.planning.dop import optimize_placement
+
+    rng = np.random.default_rng(1)
+    res = optimize_placement(
+        2,
+        "bearing",
+        fixed_nodes_m=[[100.0, 0.0], [0.0, 150.0]],
+        min_standoff_m=50,
+        max_standoff_m=500,
+        rng=rng,
+        starts=4,
+    )
+    assert res.gap > 0.1  # with two nodes already in place the symmetric ring is clearly suboptimal
+    assert res.start_hdop.shape == (4,) and res.start_nodes_m.shape == (4, 2, 2)
+    with pytest.raises(ConfigError, match="stand-off"):
+        optimize_placement(3, "range", min_standoff_m=10, max_standoff_m=5, rng=rng)
+    with pytest.raises(ConfigError, match="at least 3"):
+        optimize_placement(2, "tdoa", min_standoff_m=1, max_standoff_m=5, rng=rng)

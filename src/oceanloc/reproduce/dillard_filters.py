@@ -286,6 +286,10 @@ def reproduce_dillard_filters(
     times = epoch_times(sc.dt_s, sc.duration_s)
     every = max(1, round(0.1 / sc.dt_s))  # keep run 0's estimates every 0.1 s for the figures
     task = _FiltersTask(scenario=sc, variants=variants, block=2000, example_every=every)
+    if chunk_size is None:
+        # Large chunks vectorize better; two per worker still balance the load and show progress.
+        workers = getattr(executor, "_max_workers", None) or getattr(executor, "oceanloc_workers", None) or 1
+        chunk_size = max(1, -(-sc.runs // (2 * int(workers))))
     chunks = run_chunked(task, sc.runs, executor=executor, chunk_size=chunk_size, progress=progress)  # type: ignore[arg-type]
     nodes = scenario_nodes(sc, times)
     truth = scenario_truth(sc, times, np.random.default_rng(0), 1)
