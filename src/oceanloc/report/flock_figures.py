@@ -89,9 +89,11 @@ def rmse_vs_bound(result: DillardFiltersResult, path: Path) -> Path:
     ax = fig.add_subplot()
     t = result.times_s
     step = max(1, t.size // 4000)
-    for v in result.variants.values():
+    for key, v in result.variants.items():
         pos = np.sqrt(v.rmse_time[::step, 0] ** 2 + v.rmse_time[::step, 1] ** 2)
-        ax.semilogy(t[::step], pos, lw=1, label=v.variant.label)
+        control = key.endswith("control")
+        style = {"ls": ":", "lw": 2.0} if control else {"ls": "-", "lw": 1.0}
+        ax.semilogy(t[::step], pos, label=v.variant.label + (" [control]" if control else ""), **style)
     ax.semilogy(t[::step], np.sqrt(result.pcrlb_position_m2[::step]), "k--", lw=1, label="sqrt(PCRLB)")
     ax.set(xlabel="time (s)", ylabel="position RMSE (m)", title=f"Position RMSE over {result.runs} runs")
     ax.legend(fontsize=8)
