@@ -11,6 +11,7 @@ step ``dt`` and then updates with the measurements ``z_k`` taken at ``t_k = t_0 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Literal, TypeAlias
 
@@ -222,16 +223,7 @@ def filter_step(
             params,
             angle_mask=sensor_model.angle_mask,
         )
-        if pred.repaired.any():
-            return UpdateResult(
-                state=upd.state,
-                innovation=upd.innovation,
-                innovation_cov=upd.innovation_cov,
-                nis=upd.nis,
-                dof=upd.dof,
-                repaired=upd.repaired | pred.repaired,
-            )
-        return upd
+        return dataclasses.replace(upd, repaired=upd.repaired | pred.repaired)
     prior = predict(state, motion)
     if kind == "ekf":
         return ekf_update(
