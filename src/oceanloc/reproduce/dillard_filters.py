@@ -27,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from oceanloc._random import run_generators
 from oceanloc._typing import FloatArray
 from oceanloc.config.flock import FlockScenario, MotionKind, load_flock_scenario
 from oceanloc.errors import ConfigError
@@ -41,7 +40,7 @@ from oceanloc.sim.flock import (
     scenario_nodes,
     scenario_sensor_model,
     scenario_truth,
-    simulate_measurements,
+    simulate_scenario,
 )
 
 SCENARIO = "dillard-filters"
@@ -108,12 +107,14 @@ class _FiltersTask:
 
     def __call__(self, run_indices: np.ndarray) -> _ChunkOut:
         sc = self.scenario
-        times = epoch_times(sc.dt_s, sc.duration_s)
-        rngs = run_generators(sc.seed, run_indices)
-        nodes = scenario_nodes(sc, times)
-        truth = scenario_truth(sc, times, rngs, len(run_indices))
-        model = scenario_sensor_model(sc)
-        z = simulate_measurements(model, truth, nodes, sc.sigma_true, rngs)
+        sim = simulate_scenario(sc, run_indices)
+        times, nodes, truth, model, z = (
+            sim.times_s,
+            sim.nodes_m,
+            sim.truth,
+            sim.sensor_model,
+            sim.measurements,
+        )
         truth_b = np.broadcast_to(truth, (len(run_indices), *truth.shape[-2:]))
         f = sc.filters
         params = SigmaPointParams(alpha=f.ukf_alpha, beta=f.ukf_beta, kappa=f.ukf_kappa)

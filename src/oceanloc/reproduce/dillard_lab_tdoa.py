@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
-from oceanloc._random import run_generators
 from oceanloc._typing import FloatArray
 from oceanloc.config.flock import FlockScenario, load_flock_scenario
 from oceanloc.errors import ConfigError
@@ -25,13 +24,7 @@ from oceanloc.estimation.gaussian import Gaussian
 from oceanloc.estimation.tracking import run_filter
 from oceanloc.estimation.unscented import SigmaPointParams
 from oceanloc.evaluation.montecarlo import run_chunked
-from oceanloc.sim.flock import (
-    epoch_times,
-    scenario_nodes,
-    scenario_sensor_model,
-    scenario_truth,
-    simulate_measurements,
-)
+from oceanloc.sim.flock import epoch_times, scenario_nodes, simulate_scenario
 
 SCENARIO = "dillard-lab-tdoa"
 THESIS_MSE_X_M2 = 0.21
@@ -63,14 +56,10 @@ class _LabTask:
 
     def __call__(self, run_indices: np.ndarray) -> _LabChunk:
         sc = self.scenario
-        times = epoch_times(sc.dt_s, sc.duration_s)
-        rngs = run_generators(sc.seed, run_indices)
         r = len(run_indices)
-        nodes = scenario_nodes(sc, times)
-        truth = scenario_truth(sc, times, rngs, r)
-        model = scenario_sensor_model(sc)
-        clean = model.measure(truth, nodes)
-        z = simulate_measurements(model, truth, nodes, sc.sigma_true, rngs)
+        sim = simulate_scenario(sc, run_indices)
+        times, nodes, truth, model = sim.times_s, sim.nodes_m, sim.truth, sim.sensor_model
+        clean, z = sim.clean, sim.measurements
         f = sc.filters
         motion = f.motion_model(f.ukf_motion, sc.dt_s)
         params = SigmaPointParams(alpha=f.ukf_alpha, beta=f.ukf_beta, kappa=f.ukf_kappa)

@@ -14,10 +14,11 @@ run (:func:`oceanloc._random.run_generators`), so a run's draws do not depend on
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from oceanloc._random import BatchRng, standard_normal, uniform
+from oceanloc._random import BatchRng, run_generators, standard_normal, uniform
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.config.flock import FlockScenario
 from oceanloc.errors import ConfigError
@@ -235,4 +236,48 @@ def scenario_sensor_model(scenario: FlockScenario) -> FlockSensorModel:
         scenario.filters.measurement_sigma,
         pairs=scenario.pairs,
         sound_speed_mps=scenario.sound_speed_mps,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FlockSimulation:
+    """Simulated runs of a scenario.
+
+    Attributes
+    ----------
+    times_s : (T,) float
+    nodes_m : (T, N, 2) float
+    truth : (T, 6) or (R, T, 6) float
+        Shared by all runs for a straight target.
+    sensor_model : FlockSensorModel
+        The filters' measurement model.
+    clean : (R, T, m) or (T, m) float
+        Noise-free measurements.
+    measurements : (R, T, m) float
+        Noisy measurements.
+    """
+
+    times_s: FloatArray
+    nodes_m: FloatArray
+    truth: FloatArray
+    sensor_model: FlockSensorModel
+    clean: FloatArray
+    measurements: FloatArray
+
+
+def simulate_scenario(scenario: FlockScenario, run_indices: ArrayLike) -> FlockSimulation:
+    """Simulate the given Monte Carlo runs of a scenario (each run from its own ``(seed, run)`` generator)."""
+    runs = np.asarray(run_indices)
+    times = epoch_times(scenario.dt_s, scenario.duration_s)
+    rngs = run_generators(scenario.seed, runs)
+    nodes = scenario_nodes(scenario, times)
+    truth = scenario_truth(scenario, times, rngs, runs.size)
+    model = scenario_sensor_model(scenario)
+    return FlockSimulation(
+        times_s=times,
+        nodes_m=nodes,
+        truth=truth,
+        sensor_model=model,
+        clean=model.measure(truth, nodes),
+        measurements=simulate_measurements(model, truth, nodes, scenario.sigma_true, rngs),
     )
