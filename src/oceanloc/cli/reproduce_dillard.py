@@ -135,12 +135,13 @@ def dillard_filters(
 def print_lab(res: LabTdoaResult) -> None:
     """The lab test's figures beside ours."""
     table = Table(title=f"Lab TDOA UKF test (Chapter V.C): thesis (1 run) vs oceanloc ({res.runs} runs)")
-    for col in ("quantity", "thesis", "oceanloc mean ± sd"):
+    for col in ("quantity", "thesis", "oceanloc mean ± sd", "median"):
         table.add_column(col, justify="right")
 
     def row(name: str, thesis: str, values: np.ndarray, scale: float = 1.0) -> None:
         sd = float(np.std(values, ddof=1)) if values.size > 1 else 0.0
-        table.add_row(name, thesis, _pm(float(np.mean(values)) * scale, sd * scale))
+        median = f"{float(np.median(values)) * scale:.4g}"
+        table.add_row(name, thesis, _pm(float(np.mean(values)) * scale, sd * scale), median)
 
     row("position MSE X (m²)", f"{THESIS_MSE_X_M2}", res.mse_xy_m2[:, 0])
     row("position MSE Y (m²)", f"{THESIS_MSE_Y_M2}", res.mse_xy_m2[:, 1])

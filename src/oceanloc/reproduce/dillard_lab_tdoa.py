@@ -135,7 +135,8 @@ class LabTdoaResult:
         """Summary statistics (means and standard deviations over runs) beside the thesis' values."""
 
         def stat(x: FloatArray) -> dict[str, float]:
-            return {"mean": float(np.mean(x)), "sd": float(np.std(x, ddof=1)) if x.size > 1 else 0.0}
+            sd = float(np.std(x, ddof=1)) if x.size > 1 else 0.0
+            return {"mean": float(np.mean(x)), "sd": sd, "median": float(np.median(x))}
 
         return {
             "runs": self.runs,
