@@ -7,6 +7,8 @@ batch dimensions (runs, transponders, measurements, sigma points); they never mu
 
 from __future__ import annotations
 
+from typing import Literal, TypeAlias
+
 import numpy as np
 
 from oceanloc._random import BatchRng, standard_normal
@@ -76,3 +78,188 @@ def simulate_ranges(
     true = np.atleast_1d(true)
     noise = standard_normal(rng, true.shape[0], true.shape[1:])
     return true + sigma_range_m * noise
+
+
+# --- Flock tracking: planar bearing, range and TDOA to a target state [X, Y, u, v, ax, ay] ---------------
+# Dillard (AquaQuad thesis), eqs. (II.3), (II.4), (II.7). The target argument is any state whose first two
+# components are the horizontal position (a 2-vector position, the 4-state CV or the 6-state CA state); the
+# Jacobian has one column per state component, zero beyond the position. Sensors are broadcast against the
+# target's leading dimensions: ``target (..., d)`` with ``sensors_m (..., N, 2)`` gives ``(..., N)``.
+
+
+MeasurementKind: TypeAlias = Literal["bearing", "range", "tdoa"]
+"""Flock measurement types: bearing (II.3), horizontal range (II.4), time difference of arrival (II.7)."""
+MEASUREMENT_KINDS: tuple[str, ...] = ("bearing", "range", "tdoa")
+
+
+def wrap_angle_rad(angle_rad: ArrayLike) -> FloatArray:
+    """Wrap angles to ``(-pi, pi]``, the range of ``atan2``; used for every bearing residual."""
+    a = np.asarray(angle_rad, dtype=float)
+    # a - 2 pi ceil((a - pi) / 2 pi), written with floor (several times faster than np.mod).
+    return a + (2.0 * np.pi) * np.floor((np.pi - a) / (2.0 * np.pi))
+
+
+def _offsets(target: ArrayLike, sensors_m: ArrayLike) -> FloatArray:
+    t = np.asarray(target, dtype=float)
+    s = np.asarray(sensors_m, dtype=float)
+    if t.shape[-1] < 2 or s.shape[-1] != 2:
+        raise ValueError(f"target needs (..., d>=2) and sensors (..., N, 2); got {t.shape} and {s.shape}")
+    return t[..., None, :2] - s
+
+
+def _state_jacobian(d_xy: FloatArray, n_state: int) -> FloatArray:
+    if n_state == 2:
+        return d_xy
+    jac = np.zeros((*d_xy.shape[:-1], n_state))
+    jac[..., :2] = d_xy
+    return jac
+
+
+def bearing_rad(target: ArrayLike, sensors_m: ArrayLike) -> FloatArray:
+    """Four-quadrant bearing from each sensor to the target, eq. (II.3).
+
+    ``theta_i = atan2(Y - y_i, X - x_i)``, counter-clockwise from the +X (east) axis, in ``(-pi, pi]``.
+
+    Parameters
+    ----------
+    target : (..., d) float
+        Target states; components 0 and 1 are the position ``X, Y`` in metres.
+    sensors_m : (..., N, 2) float
+        Sensor positions, metres; leading dimensions broadcast against ``target``'s.
+
+    Returns
+    -------
+    (..., N) float
+        Bearings, radians.
+    """
+    diff = _offsets(target, sensors_m)
+    return np.arctan2(diff[..., 1], diff[..., 0])
+
+
+def bearing_jacobian(target: ArrayLike, sensors_m: ArrayLike) -> FloatArray:
+    """Jacobian of :func:`bearing_rad` with respect to the target state.
+
+    ``d theta / dX = -(Y - y_i) / r_i^2``, ``d theta / dY = (X - x_i) / r_i^2`` (the rows of the thesis'
+    bearing-only HDOP matrix, Appendix B). At zero range the bearing is undefined; the row is zero there
+    (no information), as for :func:`range_jacobian`.
+
+    Returns
+    -------
+    (..., N, d) float
+        Rows ``dh_i / dx``, radians per metre in the position columns, zero elsewhere.
+    """
+    t = np.asarray(target, dtype=float)
+    diff = _offsets(t, sensors_m)
+    r2 = np.sum(diff * diff, axis=-1, keepdims=True)
+    rot = np.stack([-diff[..., 1], diff[..., 0]], axis=-1)
+    d_xy = np.divide(rot, r2, out=np.zeros_like(rot), where=r2 > 0.0)
+    return _state_jacobian(d_xy, t.shape[-1])
+
+
+def horizontal_range_m(target: ArrayLike, sensors_m: ArrayLike) -> FloatArray:
+    """Horizontal range from each sensor to the target, eq. (II.4).
+
+    Parameters
+    ----------
+    target : (..., d) float
+        Target states; components 0 and 1 are ``X, Y`` in metres.
+    sensors_m : (..., N, 2) float
+
+    Returns
+    -------
+    (..., N) float
+        Ranges, metres.
+    """
+    diff = _offsets(target, sensors_m)
+    return np.sqrt(np.sum(diff * diff, axis=-1))
+
+
+def horizontal_range_jacobian(target: ArrayLike, sensors_m: ArrayLike) -> FloatArray:
+    """Jacobian of :func:`horizontal_range_m`: the unit vector from sensor to target, eq. (IV.11).
+
+    Zero at zero range, where the derivative does not exist.
+
+    Returns
+    -------
+    (..., N, d) float
+        Dimensionless in the position columns, zero elsewhere.
+    """
+    t = np.asarray(target, dtype=float)
+    diff = _offsets(t, sensors_m)
+    dist = np.sqrt(np.sum(diff * diff, axis=-1, keepdims=True))
+    unit = np.divide(diff, dist, out=np.zeros_like(diff), where=dist > 0.0)
+    return _state_jacobian(unit, t.shape[-1])
+
+
+def sensor_pairs(n_sensors: int, kind: str = "all") -> np.ndarray:
+    """Sensor index pairs ``(i, j)`` for TDOA measurements ``tau_ij = tau_i - tau_j``.
+
+    Parameters
+    ----------
+    n_sensors : int
+        Number of sensors ``N >= 2``.
+    kind : {"all", "reference"}
+        ``all``: every pair ``i < j`` (``N (N - 1) / 2`` rows; for three sensors ``(0, 1), (0, 2), (1, 2)``);
+        ``reference``: ``(0, j)`` for ``j = 1 .. N-1``, the ``N - 1`` independent differences.
+
+    Returns
+    -------
+    (P, 2) int
+    """
+    if n_sensors < 2:
+        raise ValueError(f"TDOA needs at least two sensors, got {n_sensors}")
+    if kind == "all":
+        return np.array([(i, j) for i in range(n_sensors) for j in range(i + 1, n_sensors)], dtype=np.int64)
+    if kind == "reference":
+        return np.array([(0, j) for j in range(1, n_sensors)], dtype=np.int64)
+    raise ValueError(f"pair kind must be 'all' or 'reference', got {kind!r}")
+
+
+def _check_pairs(pairs: ArrayLike, n_sensors: int) -> np.ndarray:
+    p = np.asarray(pairs, dtype=np.int64)
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] == 0:
+        raise ValueError(f"pairs must be a (P, 2) integer array, got shape {p.shape}")
+    if p.min() < 0 or p.max() >= n_sensors or np.any(p[:, 0] == p[:, 1]):
+        raise ValueError(f"pairs must index two different sensors among {n_sensors}")
+    return p
+
+
+def tdoa_s(
+    target: ArrayLike, sensors_m: ArrayLike, pairs: ArrayLike, sound_speed_mps: float = 1500.0
+) -> FloatArray:
+    """Time differences of arrival, eq. (II.7): ``tau_ij = (r_i - r_j) / c``.
+
+    Sign convention: ``tau_ij > 0`` when the signal reaches sensor ``j`` first (sensor ``i`` is farther).
+
+    Parameters
+    ----------
+    target : (..., d) float
+    sensors_m : (..., N, 2) float
+    pairs : (P, 2) int
+        Sensor indices ``(i, j)`` of each measurement (:func:`sensor_pairs`).
+    sound_speed_mps : float
+        Sound speed ``c``.
+
+    Returns
+    -------
+    (..., P) float
+        Time differences, seconds.
+    """
+    r = horizontal_range_m(target, sensors_m)
+    p = _check_pairs(pairs, r.shape[-1])
+    return (r[..., p[:, 0]] - r[..., p[:, 1]]) / sound_speed_mps
+
+
+def tdoa_jacobian(
+    target: ArrayLike, sensors_m: ArrayLike, pairs: ArrayLike, sound_speed_mps: float = 1500.0
+) -> FloatArray:
+    """Jacobian of :func:`tdoa_s`, eq. (IV.13): ``(u_i - u_j) / c`` with ``u`` the unit line-of-sight vectors.
+
+    Returns
+    -------
+    (..., P, d) float
+        Seconds per metre in the position columns, zero elsewhere.
+    """
+    unit = horizontal_range_jacobian(target, sensors_m)
+    p = _check_pairs(pairs, unit.shape[-2])
+    return (unit[..., p[:, 0], :] - unit[..., p[:, 1], :]) / sound_speed_mps

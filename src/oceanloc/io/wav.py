@@ -1,0 +1,98 @@
+"""Read hydrophone recordings from WAV files of any common sample format.
+
+8-bit unsigned, 16-, 24- and 32-bit signed integer PCM and 32- or 64-bit IEEE float, mono or multi-channel
+(including WAVE_FORMAT_EXTENSIBLE headers), through :func:`scipy.io.wavfile.read`. Samples are returned as
+floats scaled to ``[-1, 1)`` (full scale of the integer format; float files as stored), so recordings of
+different formats can be correlated directly. Unreadable files and recordings that cannot be compared
+(different sample rates) raise :class:`oceanloc.errors.DataError` naming the files.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.io.wavfile
+
+from oceanloc._typing import FloatArray
+from oceanloc.errors import DataError
+
+_INT_SCALE = {np.dtype(np.int16): 2.0**15, np.dtype(np.int32): 2.0**31, np.dtype(np.int64): 2.0**63}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Recording:
+    """A recording read from a WAV file.
+
+    Attributes
+    ----------
+    samples : (n,) or (n, channels) float
+        Samples scaled to full scale ``[-1, 1)``.
+    sample_rate_hz : float
+    source : str
+        File name, for messages.
+    sample_format : str
+        Stored format: ``uint8``, ``int16``, ``int32`` (24- and 32-bit PCM; scipy left-justifies 24-bit
+        samples into 32 bits), ``float32`` or ``float64``.
+    """
+
+    samples: FloatArray
+    sample_rate_hz: float
+    source: str
+    sample_format: str
+
+    @property
+    def n_channels(self) -> int:
+        return 1 if self.samples.ndim == 1 else int(self.samples.shape[1])
+
+    @property
+    def duration_s(self) -> float:
+        return self.samples.shape[0] / self.sample_rate_hz
+
+    def channel(self, index: int = 0) -> FloatArray:
+        """One channel as ``(n,)``; DataError if it does not exist."""
+        if not 0 <= index < self.n_channels:
+            raise DataError(f"{self.source}: has {self.n_channels} channel(s), channel {index} requested")
+        return self.samples if self.samples.ndim == 1 else self.samples[:, index]
+
+
+def read_wav(path: str | Path) -> Recording:
+    """Read a WAV file into a :class:`Recording` of floats in ``[-1, 1)``."""
+    p = Path(path)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", scipy.io.wavfile.WavFileWarning)
+            rate, data = scipy.io.wavfile.read(p)
+    except FileNotFoundError:
+        raise DataError(f"{p}: file not found") from None
+    except Exception as exc:  # scipy raises assorted types (ValueError, UnboundLocalError) on bad headers
+        raise DataError(f"{p}: not a readable WAV file ({exc})") from None
+    if data.shape[0] == 0:
+        raise DataError(f"{p}: holds no samples")
+    if rate <= 0:
+        raise DataError(f"{p}: invalid sample rate {rate}")
+    fmt = data.dtype
+    if fmt == np.uint8:
+        samples = (data.astype(float) - 128.0) / 128.0
+    elif fmt in _INT_SCALE:
+        samples = data.astype(float) / _INT_SCALE[fmt]
+    elif fmt.kind == "f":
+        samples = data.astype(float)
+    else:
+        raise DataError(f"{p}: unsupported sample format {fmt}")
+    if not np.all(np.isfinite(samples)):
+        raise DataError(f"{p}: holds non-finite samples (NaN or inf)")
+    return Recording(samples=samples, sample_rate_hz=float(rate), source=str(p), sample_format=str(fmt))
+
+
+def common_sample_rate(*recordings: Recording) -> float:
+    """The sample rate shared by all recordings; DataError naming each file and rate if they differ."""
+    rates = {r.sample_rate_hz for r in recordings}
+    if len(rates) != 1:
+        listing = ", ".join(f"{r.source} at {r.sample_rate_hz:g} Hz" for r in recordings)
+        raise DataError(
+            f"recordings have different sample rates ({listing}); resample them to one rate first"
+        )
+    return rates.pop()
