@@ -1,0 +1,192 @@
+"""Drift propagation for planners (OMPL's ``StatePropagator``: ``propagate(state, control, duration)``).
+
+Drifting is the control "do nothing" applied for a duration: the state moves with the current. The
+:class:`DriftPropagator` wraps a current field and an integrator (the thesis' Euler step of 60 s by default,
+or RK4) and offers
+
+- :meth:`DriftPropagator.step_xy`: one step on floats or arrays (sequential planners use floats);
+- :meth:`DriftPropagator.rollout`: many particles at once for many steps, stopping each where it leaves the
+  valid space or the field, recording samples every ``stride`` steps and, per particle, the cheapest way to
+  finish from its trajectory (drift into the goal disk, or fly from the closest point to the goal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from oceanloc.errors import ConfigError
+from oceanloc.models.currents import CurrentField, Scalar
+from oceanloc.models.drift import METHODS, Method, step_function
+from oceanloc.planning.drift_rrt.space import DriftSpace
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Rollout:
+    """Trajectories of a batch of drifters, sampled every ``stride`` steps.
+
+    Attributes
+    ----------
+    samples_m : (S, P, 2) float
+        Positions at steps ``sample_steps``; ``NaN`` once a particle has stopped.
+    sample_steps : (S,) int
+        Step index of each sample (``0, stride, 2 stride, ...``).
+    goal_distance_m : (P,) float
+        Smallest distance to the goal over every step of the trajectory.
+    goal_step : (P,) int
+        The step where it occurs (the first step inside the goal disk if the drift reaches it).
+    reaches_goal : (P,) bool
+        Whether the drift enters the goal disk.
+    end_step : (P,) int
+        Last valid step.
+    """
+
+    samples_m: FloatArray
+    sample_steps: IntArray
+    goal_distance_m: FloatArray
+    goal_step: IntArray
+    reaches_goal: BoolArray
+    end_step: IntArray
+
+    @property
+    def finish_cost_m(self) -> FloatArray:
+        """``(P,)`` flight distance to finish from the trajectory: 0 if the drift reaches the goal disk."""
+        return np.where(self.reaches_goal, 0.0, self.goal_distance_m)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DriftPropagator:
+    """A current field and an integrator.
+
+    Attributes
+    ----------
+    field : CurrentField
+        The planning current.
+    dt_s : float
+        Integration step (60 s in the thesis).
+    method : {"euler", "rk4"}
+        One-step map: Euler reproduces the thesis; RK4 for continuous fields.
+    """
+
+    field: CurrentField
+    dt_s: float = 60.0
+    method: Method = "euler"
+
+    def __post_init__(self) -> None:
+        if not self.dt_s > 0:
+            raise ConfigError(f"drift step dt_s must be positive, got {self.dt_s}")
+        if self.method not in METHODS:
+            raise ConfigError(f"drift integrator must be one of {', '.join(METHODS)}; got '{self.method}'")
+
+    def step_xy(self, x_m: Scalar, y_m: Scalar, time_s: Scalar = 0.0) -> tuple[Scalar, Scalar]:
+        """One drift step; ``NaN`` where the current is undefined."""
+        return step_function(self.method)(self.field, x_m, y_m, time_s, self.dt_s)
+
+    def propagate(
+        self, space: DriftSpace, states_m: ArrayLike, n_steps: int, t0_s: float = 0.0
+    ) -> tuple[FloatArray, BoolArray]:
+        """Drift ``(P, 2)`` states for ``n_steps`` steps; returns the states and whether each stayed valid.
+
+        A state that meets an obstacle, the bounds or an undefined current stops at its last valid
+        position and is reported invalid.
+        """
+        p = np.array(states_m, dtype=float).reshape(-1, 2)
+        ok = space.is_valid(p)
+        step = step_function(self.method)
+        for k in range(n_steps):
+            xn, yn = step(self.field, p[:, 0], p[:, 1], t0_s + k * self.dt_s, self.dt_s)
+            good = ok & np.isfinite(xn) & np.isfinite(yn)
+            good[good] = space.is_valid_xy(xn[good], yn[good])
+            p[good, 0] = xn[good]
+            p[good, 1] = yn[good]
+            ok = good
+        return p, ok
+
+    def drift_polyline(
+        self, space: DriftSpace, start_m: ArrayLike, n_steps: int, t0_s: float = 0.0
+    ) -> FloatArray:
+        """``(n + 1, 2)`` every step of one drift, stopping early where it would become invalid."""
+        x, y = (float(v) for v in np.asarray(start_m, dtype=float))
+        out = [(x, y)]
+        for k in range(n_steps):
+            xn, yn = self.step_xy(x, y, t0_s + k * self.dt_s)
+            if not (np.isfinite(xn) and np.isfinite(yn) and space.is_valid_xy(float(xn), float(yn))):
+                break
+            x, y = float(xn), float(yn)
+            out.append((x, y))
+        return np.asarray(out)
+
+    def rollout(
+        self,
+        space: DriftSpace,
+        starts_m: ArrayLike,
+        n_steps: int,
+        *,
+        goal_m: ArrayLike,
+        goal_tolerance_m: float,
+        stride: int = 1,
+        t0_s: float = 0.0,
+    ) -> Rollout:
+        """Drift ``(P, 2)`` particles for up to ``n_steps`` steps, all at once.
+
+        Each step advances only the particles still valid (the batch shrinks as particles stop), so the
+        cost is proportional to the total number of valid steps. Particles starting invalid stop at once.
+        """
+        if stride < 1:
+            raise ConfigError(f"rollout stride must be at least 1, got {stride}")
+        p0 = np.asarray(starts_m, dtype=float).reshape(-1, 2)
+        n = p0.shape[0]
+        gx, gy = (float(v) for v in np.asarray(goal_m, dtype=float))
+        tol = float(goal_tolerance_m)
+        n_samples = n_steps // stride + 1
+        samples = np.full((n_samples, n, 2), np.nan)
+        x = p0[:, 0].copy()
+        y = p0[:, 1].copy()
+        active = np.flatnonzero(space.is_valid_xy(x, y) & np.isfinite(x) & np.isfinite(y))
+        samples[0, active] = p0[active]
+        dist = np.hypot(x - gx, y - gy)
+        best = np.where(np.isin(np.arange(n), active), dist, np.inf)
+        best_step = np.zeros(n, dtype=np.int64)
+        reached = np.zeros(n, dtype=bool)
+        reached[active] = dist[active] < tol
+        end_step = np.zeros(n, dtype=np.int64)
+        step = step_function(self.method)
+        field = self.field
+        dt = self.dt_s
+        ax = x[active]
+        ay = y[active]
+        for k in range(1, n_steps + 1):
+            if active.size == 0:
+                break
+            xn, yn = step(field, ax, ay, t0_s + (k - 1) * dt, dt)
+            ok = np.isfinite(xn) & np.isfinite(yn)
+            ok[ok] = space.is_valid_xy(xn[ok], yn[ok])
+            if not ok.all():
+                active = active[ok]
+                xn = xn[ok]
+                yn = yn[ok]
+            ax, ay = xn, yn
+            end_step[active] = k
+            d = np.hypot(ax - gx, ay - gy)
+            fresh = ~reached[active]
+            improve = fresh & (d < best[active])
+            if improve.any():
+                idx = active[improve]
+                best[idx] = d[improve]
+                best_step[idx] = k
+                reached[idx] = d[improve] < tol
+            if k % stride == 0:
+                s = k // stride
+                samples[s, active, 0] = ax
+                samples[s, active, 1] = ay
+        sample_steps = np.arange(n_samples) * stride
+        return Rollout(
+            samples_m=samples,
+            sample_steps=sample_steps,
+            goal_distance_m=best,
+            goal_step=best_step,
+            reaches_goal=reached,
+            end_step=end_step,
+        )
