@@ -334,6 +334,8 @@ class GridCurrent(_FieldBase):
         nx, ny = self.x_m.size, self.y_m.size
         fx = (x - x0) / dx
         fy = (y - y0) / dy
+        if lists is not None and self.interpolation == "cell" and x.ndim == 1 and fx.shape == fy.shape:
+            return self._cell_steady(fx, fy, nx, ny)
         outside = (fx < 0.0) | (fx > nx - 1) | (fy < 0.0) | (fy > ny - 1) | ~np.isfinite(fx + fy)
         fx = np.where(outside, 0.0, fx)
         fy = np.where(outside, 0.0, fy)
@@ -361,6 +363,19 @@ class GridCurrent(_FieldBase):
         v = np.where(bad, np.nan, v)
         if u.ndim == 0:
             return float(u), float(v)
+        return u, v
+
+    def _cell_steady(self, fx: FloatArray, fy: FloatArray, nx: int, ny: int) -> tuple[FloatArray, FloatArray]:
+        """Fast path of the steady cell lookup on 1-D arrays (planners' rollouts)."""
+        ok = (fx >= 0.0) & (fx <= nx - 1) & (fy >= 0.0) & (fy <= ny - 1)
+        ix = np.minimum(np.maximum(fx, 0.0), nx - 1).astype(np.intp)
+        iy = np.minimum(np.maximum(fy, 0.0), ny - 1).astype(np.intp)
+        k = iy * nx + ix
+        u = self.u_mps[0].ravel()[k]
+        v = self.v_mps[0].ravel()[k]
+        if not ok.all():
+            u[~ok] = np.nan
+            v[~ok] = np.nan
         return u, v
 
     def _cell_scalar(

@@ -154,16 +154,16 @@ class ObstacleMap:
         y = np.asarray(y_m, dtype=float)
         free = self.in_bounds_xy(x, y)
         m = self.inflation_m
-        if len(self._rect_list):
-            r = self.rectangles_m
-            xe, ye = x[..., None], y[..., None]
+        m2 = m * m
+        # One rectangle at a time on flat arrays: cheaper than broadcasting (P, R) and reducing.
+        for a, b, c, d in self._rect_list:
             if m == 0.0:
-                hit = (xe >= r[:, 0]) & (xe < r[:, 1]) & (ye >= r[:, 2]) & (ye < r[:, 3])
+                hit = (x >= a) & (x < b) & (y >= c) & (y < d)
             else:
-                dx = np.maximum(np.maximum(r[:, 0] - xe, xe - r[:, 1]), 0.0)
-                dy = np.maximum(np.maximum(r[:, 2] - ye, ye - r[:, 3]), 0.0)
-                hit = dx * dx + dy * dy <= m * m
-            free &= ~hit.any(axis=-1)
+                dx = np.maximum(np.maximum(a - x, x - b), 0.0)
+                dy = np.maximum(np.maximum(c - y, y - d), 0.0)
+                hit = dx * dx + dy * dy <= m2
+            free &= ~hit
         for poly in self.polygons_m:
             blocked = _inside_polygon(x, y, poly)
             if m > 0.0:

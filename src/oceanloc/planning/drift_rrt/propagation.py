@@ -39,6 +39,8 @@ class Rollout:
         The step where it occurs (the first step inside the goal disk if the drift reaches it).
     reaches_goal : (P,) bool
         Whether the drift enters the goal disk.
+    closest_m : (P, 2) float
+        Position at ``goal_step``.
     end_step : (P,) int
         Last valid step.
     """
@@ -48,6 +50,7 @@ class Rollout:
     goal_distance_m: FloatArray
     goal_step: IntArray
     reaches_goal: BoolArray
+    closest_m: FloatArray
     end_step: IntArray
 
     @property
@@ -142,45 +145,55 @@ class DriftPropagator:
         tol = float(goal_tolerance_m)
         n_samples = n_steps // stride + 1
         samples = np.full((n_samples, n, 2), np.nan)
-        x = p0[:, 0].copy()
-        y = p0[:, 1].copy()
-        active = np.flatnonzero(space.is_valid_xy(x, y) & np.isfinite(x) & np.isfinite(y))
+        active = np.flatnonzero(space.is_valid_xy(p0[:, 0], p0[:, 1]))
         samples[0, active] = p0[active]
-        dist = np.hypot(x - gx, y - gy)
-        best = np.where(np.isin(np.arange(n), active), dist, np.inf)
+        best = np.full(n, np.inf)
         best_step = np.zeros(n, dtype=np.int64)
-        reached = np.zeros(n, dtype=bool)
-        reached[active] = dist[active] < tol
+        closest = np.full((n, 2), np.nan)
         end_step = np.zeros(n, dtype=np.int64)
+        # State of the active particles, kept aligned with ``active``; a particle inside the goal disk has
+        # best distance -inf so that it never "improves" again.
+        ax = p0[active, 0].copy()
+        ay = p0[active, 1].copy()
+        ab = np.hypot(ax - gx, ay - gy)
+        closest[active] = p0[active]
+        best[active] = ab
+        ab = np.where(ab < tol, -np.inf, ab)
         step = step_function(self.method)
         field = self.field
         dt = self.dt_s
-        ax = x[active]
-        ay = y[active]
+        valid = space.is_valid_xy
         for k in range(1, n_steps + 1):
             if active.size == 0:
                 break
             xn, yn = step(field, ax, ay, t0_s + (k - 1) * dt, dt)
-            ok = np.isfinite(xn) & np.isfinite(yn)
-            ok[ok] = space.is_valid_xy(xn[ok], yn[ok])
+            ok = valid(xn, yn)  # NaN (undefined current) compares False: invalid
             if not ok.all():
+                dead = ~ok
+                end_step[active[dead]] = k - 1
                 active = active[ok]
                 xn = xn[ok]
                 yn = yn[ok]
+                ab = ab[ok]
             ax, ay = xn, yn
-            end_step[active] = k
-            d = np.hypot(ax - gx, ay - gy)
-            fresh = ~reached[active]
-            improve = fresh & (d < best[active])
+            ex = ax - gx
+            ey = ay - gy
+            d = np.sqrt(ex * ex + ey * ey)
+            improve = d < ab
             if improve.any():
                 idx = active[improve]
-                best[idx] = d[improve]
+                di = d[improve]
                 best_step[idx] = k
-                reached[idx] = d[improve] < tol
+                closest[idx, 0] = ax[improve]
+                closest[idx, 1] = ay[improve]
+                best[idx] = di
+                ab[improve] = np.where(di < tol, -np.inf, di)
             if k % stride == 0:
                 s = k // stride
                 samples[s, active, 0] = ax
                 samples[s, active, 1] = ay
+        end_step[active] = min(n_steps, k) if n_steps else 0
+        reached = best < tol
         sample_steps = np.arange(n_samples) * stride
         return Rollout(
             samples_m=samples,
@@ -188,5 +201,6 @@ class DriftPropagator:
             goal_distance_m=best,
             goal_step=best_step,
             reaches_goal=reached,
+            closest_m=closest,
             end_step=end_step,
         )
