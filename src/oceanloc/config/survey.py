@@ -163,7 +163,12 @@ class SurveyScenario:
 def builtin_survey_scenarios() -> list[str]:
     """Names of the scenarios shipped with oceanloc."""
     files = resources.files(_SCENARIO_PACKAGE).iterdir()
-    return sorted(f.name.removesuffix(".toml") for f in files if f.name.endswith(".toml"))
+    # Drift-planning scenarios share the folder (oceanloc.config.drift).
+    return sorted(
+        f.name.removesuffix(".toml")
+        for f in files
+        if f.name.endswith(".toml") and not f.name.startswith("dillard-drift-")
+    )
 
 
 def load_survey_scenario(name_or_path: str | Path) -> SurveyScenario:

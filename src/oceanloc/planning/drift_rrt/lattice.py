@@ -298,7 +298,8 @@ class _ValueLattice:
                 shape = (z.shape[0], lands.shape[0], 2)
                 ok = self.problem.space.flight_valid(np.broadcast_to(z[:, None, :], shape), np.broadcast_to(lands[None], shape))
                 dist = np.where(ok, dist, np.inf)
-            dist = np.where(dist <= self.leg, dist, np.inf)
+            # Zero-length "flights" (landing where one already is) are not moves.
+            dist = np.where((dist <= self.leg) & (dist > 1e-6), dist, np.inf)
             total = dist + arrive[None, :]
             k = int(np.argmin(total))
             v = float(total.flat[k])
@@ -332,8 +333,8 @@ def _extract(
         v, s, j = lattice.best_takeoff(samples)
         if not math.isfinite(v):
             return None
-        if v > promised + 1e-6 and legs:
-            # The approximate values misled the greedy step; finish with a straight flight to the goal.
+        if v > promised + lattice.opts.spacing_m and legs:
+            # The lattice values misled the greedy step; finish with straight legs to the goal.
             return _finish_direct(lattice, legs, samples, steps)
         promised = v
         landing = lattice.landings[j]
@@ -350,11 +351,28 @@ def _extract(
 
 
 def _finish_direct(lattice: _ValueLattice, legs: list[_Leg], samples: FloatArray, steps: IntArray) -> list[_Leg] | None:
-    g = lattice.goal_flight(samples)
+    """Fly from the sample closest to the goal straight to it, in legs of at most ``max_leg`` if needed."""
+    g = np.hypot(samples[:, 0] - lattice.goal[0], samples[:, 1] - lattice.goal[1])
+    g[~np.isfinite(g)] = np.inf
     s = int(np.argmin(g))
     if not math.isfinite(g[s]):
         return None
-    legs.append(_Leg(drift_steps=int(steps[s]), landing=lattice.goal, to_goal=True))
+    start = samples[s]
+    n = max(1, math.ceil(g[s] / lattice.leg)) if math.isfinite(lattice.leg) else 1
+    space = lattice.problem.space
+    for extra in range(8):
+        k = n + extra
+        frac = np.arange(1, k)[:, None] / k
+        stops = start[None, :] + frac * (lattice.goal - start)[None, :]
+        if stops.shape[0] == 0 or bool(np.all(space.is_valid(stops))):
+            break
+    else:
+        return None
+    legs.append(_Leg(drift_steps=int(steps[s]), landing=stops[0] if stops.shape[0] else lattice.goal, to_goal=stops.shape[0] == 0))
+    for i in range(1, stops.shape[0]):
+        legs.append(_Leg(drift_steps=0, landing=stops[i], to_goal=False))
+    if stops.shape[0]:
+        legs.append(_Leg(drift_steps=0, landing=lattice.goal, to_goal=True))
     return legs
 
 
@@ -482,7 +500,8 @@ def _build_path(problem: DriftProblem, legs: list[_Leg]) -> DriftPath:
     path = DriftPath.from_segments(
         segments, t0_s=problem.t0_s, dt_s=prop.dt_s, flight_speed_mps=problem.energy.flight_speed_mps
     )
-    return path.merged()
+    # Flights of any length: consecutive flights are one straight flight. With legs, each leg lands.
+    return path.merged() if problem.max_leg_m is None else path
 
 
 def plan_lattice(

@@ -1,9 +1,10 @@
 """Drift/flight paths: a polyline whose edges are either drift steps or straight flights.
 
 A :class:`DriftPath` holds every drift step (so a follower or a figure sees the real track) and marks the
-edges flown. Consecutive flights are merged into one straight flight, as the thesis does at the end of
-DR-RRT* ("sequential hop segments were joined into a single period of flight", V.A.1); the flight energy
-is that of the straight distance flown (IV.14).
+edges flown; its flight energy is that of the distance flown (IV.14). :meth:`DriftPath.merged` joins
+consecutive flights into one straight flight, as the thesis does at the end of DR-RRT* ("sequential hop
+segments were joined into a single period of flight", V.A.1); a planner that keeps flights to legs of at
+most one hop does not merge them.
 """
 
 from __future__ import annotations
@@ -125,8 +126,8 @@ class DriftPath:
 
     @property
     def flight_distance_m(self) -> float:
-        """Straight distance flown (after merging consecutive flights)."""
-        return float(np.sum(np.linalg.norm(self.hops_m()[:, 1] - self.hops_m()[:, 0], axis=1)))
+        """Distance flown: the sum of the flight edges (merge first for the thesis' accounting)."""
+        return float(np.sum(self.edge_lengths_m()[self.flight])) if self.n_points > 1 else 0.0
 
     @property
     def drift_time_s(self) -> float:
@@ -134,14 +135,9 @@ class DriftPath:
         return float(np.sum(dt[~self.flight]))
 
     def hops_m(self) -> FloatArray:
-        """``(H, 2, 2)`` take-off and landing point of every flight, consecutive flights merged."""
-        if self.n_points < 2 or not self.flight.any():
-            return np.zeros((0, 2, 2))
-        f = self.flight.astype(np.int8)
-        edges = np.diff(np.concatenate([[0], f, [0]]))
-        first = np.flatnonzero(edges == 1)
-        last = np.flatnonzero(edges == -1)
-        return np.stack([self.points_m[first], self.points_m[last]], axis=1)
+        """``(H, 2, 2)`` take-off and landing point of every flight edge (a hop, or one leg of a chain)."""
+        idx = np.flatnonzero(self.flight)
+        return np.stack([self.points_m[idx], self.points_m[idx + 1]], axis=1) if idx.size else np.zeros((0, 2, 2))
 
     def merged(self) -> DriftPath:
         """The same path with each run of consecutive flights replaced by one straight flight."""
@@ -155,7 +151,7 @@ class DriftPath:
         )
 
     def energy(self, budget: EnergyBudget) -> PathEnergy:
-        """Energy account (IV.14): merged straight flight distance, solar income and loads over the duration."""
+        """Energy account (IV.14): distance flown, solar income and loads over the duration."""
         flight = float(budget.flight_energy_wh(self.flight_distance_m))
         solar = float(budget.solar_energy_wh(self.duration_s))
         loads = float(budget.load_energy_wh(self.duration_s))

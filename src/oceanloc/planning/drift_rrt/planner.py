@@ -10,14 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from oceanloc.config.drift import DRIFT_PLANNERS
 from oceanloc.errors import ConfigError
 from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 
-PLANNER_NAMES: tuple[str, ...] = ("thesis-single", "thesis-optimality-seeking", "oceanloc")
-"""``thesis-single``: DR-RRT* stopping at its first solution; ``thesis-optimality-seeking``: DR-RRT* over
-25,000 iterations keeping the cheapest solution; ``oceanloc``: the lattice planner."""
+PLANNER_NAMES: tuple[str, ...] = DRIFT_PLANNERS
 
 
 @dataclass(frozen=True, slots=True)
