@@ -4,3 +4,6 @@ One import per module; keep them sorted so that merges stay trivial.
 """
 
 from __future__ import annotations
+
+from oceanloc.cli import drift_plan  # noqa: F401
+from oceanloc.cli import reproduce_dillard_drrt  # noqa: F401
