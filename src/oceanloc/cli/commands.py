@@ -7,3 +7,4 @@ from __future__ import annotations
 
 from oceanloc.cli import drift_plan  # noqa: F401
 from oceanloc.cli import reproduce_dillard_drrt  # noqa: F401
+from oceanloc.cli import simulate_drift  # noqa: F401
