@@ -48,6 +48,7 @@ and the path-following trial::
     [planner]
     kind = "oceanloc"              # oceanloc | thesis-single | thesis-optimality-seeking
     seed = 1
+    time_weight_wh_per_h = 0.0     # price of time in the oceanloc planner (0: flight energy only)
 
     [following]                    # path following in a "true" current (V.D)
     watch_circle_m = 150.0
@@ -162,6 +163,8 @@ class DriftScenario:
         Default planner (one of :data:`DRIFT_PLANNERS`).
     seed : int
         Default planner seed.
+    time_weight_wh_per_h : float
+        Price of time in the oceanloc planner's objective (0: flight energy only, as the thesis).
     following : FollowingSettings
     projection : LocalProjection or None
         Local frame of a longitude/latitude current product (plans are written in lon/lat too).
@@ -185,6 +188,7 @@ class DriftScenario:
     hdop_target_m: np.ndarray | None = None
     planner: str = "oceanloc"
     seed: int = 1
+    time_weight_wh_per_h: float = 0.0
     following: FollowingSettings = field(default_factory=FollowingSettings)
     projection: LocalProjection | None = None
     currents_description: str = ""
@@ -350,6 +354,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     plan_t = root.table("planner", required=False)
     planner = plan_t.str("kind", "oceanloc", choices=DRIFT_PLANNERS)
     seed = plan_t.int("seed", 1, lo=0)
+    time_weight = plan_t.float("time_weight_wh_per_h", 0.0, lo=0.0)
     plan_t.check_unknown()
 
     fol_t = root.table("following", required=False)
@@ -388,6 +393,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         hdop_target_m=target,
         planner=planner,
         seed=seed,
+        time_weight_wh_per_h=time_weight,
         following=following,
         projection=projection,
         currents_description=cur_desc,

@@ -334,8 +334,10 @@ class GridCurrent(_FieldBase):
         nx, ny = self.x_m.size, self.y_m.size
         fx = (x - x0) / dx
         fy = (y - y0) / dy
-        if lists is not None and self.interpolation == "cell" and x.ndim == 1 and fx.shape == fy.shape:
-            return self._cell_steady(fx, fy, nx, ny)
+        if lists is not None and x.ndim == 1 and fx.shape == fy.shape:
+            if self.interpolation == "cell":
+                return self._cell_steady(fx, fy, nx, ny)
+            return self._linear_steady(fx, fy, nx, ny)
         outside = (fx < 0.0) | (fx > nx - 1) | (fy < 0.0) | (fy > ny - 1) | ~np.isfinite(fx + fy)
         fx = np.where(outside, 0.0, fx)
         fy = np.where(outside, 0.0, fy)
@@ -368,11 +370,37 @@ class GridCurrent(_FieldBase):
     def _cell_steady(self, fx: FloatArray, fy: FloatArray, nx: int, ny: int) -> tuple[FloatArray, FloatArray]:
         """Fast path of the steady cell lookup on 1-D arrays (planners' rollouts)."""
         ok = (fx >= 0.0) & (fx <= nx - 1) & (fy >= 0.0) & (fy <= ny - 1)
-        ix = np.minimum(np.maximum(fx, 0.0), nx - 1).astype(np.intp)
-        iy = np.minimum(np.maximum(fy, 0.0), ny - 1).astype(np.intp)
+        ix = np.where(ok, fx, 0.0).astype(np.intp)
+        iy = np.where(ok, fy, 0.0).astype(np.intp)
+        np.minimum(ix, nx - 1, out=ix)
+        np.minimum(iy, ny - 1, out=iy)
         k = iy * nx + ix
         u = self.u_mps[0].ravel()[k]
         v = self.v_mps[0].ravel()[k]
+        if not ok.all():
+            u[~ok] = np.nan
+            v[~ok] = np.nan
+        return u, v
+
+    def _linear_steady(self, fx: FloatArray, fy: FloatArray, nx: int, ny: int) -> tuple[FloatArray, FloatArray]:
+        """Fast path of steady bilinear interpolation on 1-D arrays (planners' rollouts)."""
+        ok = (fx >= 0.0) & (fx <= nx - 1) & (fy >= 0.0) & (fy <= ny - 1)
+        fxc = np.where(ok, fx, 0.0)
+        fyc = np.where(ok, fy, 0.0)
+        ix = np.minimum(fxc.astype(np.intp), nx - 2)
+        iy = np.minimum(fyc.astype(np.intp), ny - 2)
+        tx = fxc - ix
+        ty = fyc - iy
+        k = iy * nx + ix
+        out = []
+        for table in (self.u_mps[0].ravel(), self.v_mps[0].ravel()):
+            a = table[k]
+            b = table[k + 1]
+            c = table[k + nx]
+            d = table[k + nx + 1]
+            low = a + (b - a) * tx
+            out.append(low + (c + (d - c) * tx - low) * ty)
+        u, v = out
         if not ok.all():
             u[~ok] = np.nan
             v[~ok] = np.nan

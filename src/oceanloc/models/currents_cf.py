@@ -333,6 +333,8 @@ def _regrid_lonlat(lon: FloatArray, lat: FloatArray, u: FloatArray, v: FloatArra
     ex, _ = proj.to_local(np.array([lon0, lon0 + np.min(np.diff(lon))]), np.array([lat0, lat0]))
     _, ey = proj.to_local(np.array([lon0, lon0]), np.array([lat0, lat0 + np.min(np.diff(lat))]))
     step = float(min(abs(ex[1] - ex[0]), abs(ey[1] - ey[0])))
+    # A metre inside the box, so that rounding in the round trip never puts an edge node outside it.
+    x0, x1, y0, y1 = x0 + 1.0, x1 - 1.0, y0 + 1.0, y1 - 1.0
     xs = np.arange(x0, x1 + 1e-9, step)
     ys = np.arange(y0, y1 + 1e-9, step)
     gx, gy = np.meshgrid(xs, ys)

@@ -102,6 +102,8 @@ class _Traj:
     steps: IntArray  # (S + 1, P) drift steps to each sample
     reaches: BoolArray  # (P,) drift enters the goal disk
     goal_step: IntArray  # (P,)
+    time_cost: FloatArray  # (S + 1, P) price of the drift time to each sample, metres of flight
+    finish: FloatArray  # (P,) price of drifting into the goal disk (inf if the drift misses it)
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,7 +126,18 @@ def _trajectories(problem: DriftProblem, points: FloatArray, stride: int) -> _Tr
     samples = np.concatenate([roll.samples_m, roll.closest_m[None]], axis=0)
     n = points.shape[0]
     steps = np.concatenate([np.repeat(roll.sample_steps[:, None], n, axis=1), roll.goal_step[None]], axis=0)
-    return _Traj(points=points, samples=samples, steps=steps, reaches=roll.reaches_goal, goal_step=roll.goal_step)
+    price = problem.time_weight_m_per_s * problem.propagator.dt_s
+    time_cost = steps * price
+    finish = np.where(roll.reaches_goal, roll.goal_step * price, np.inf)
+    return _Traj(
+        points=points,
+        samples=samples,
+        steps=steps,
+        reaches=roll.reaches_goal,
+        goal_step=roll.goal_step,
+        time_cost=time_cost,
+        finish=finish,
+    )
 
 
 class _ValueLattice:
@@ -248,9 +261,9 @@ class _ValueLattice:
         """Values of every particle of ``traj`` (the first ``n_free`` are the free nodes)."""
         self.build_envelope()
         n_idx, n_cost = self.snap(traj.samples)
-        g_cost = self.goal_flight(traj.samples)
-        finish = np.where(traj.reaches, 0.0, np.inf)
-        values = np.minimum(finish, g_cost.min(axis=0))
+        n_cost = n_cost + traj.time_cost
+        g_cost = self.goal_flight(traj.samples) + traj.time_cost
+        values = np.minimum(traj.finish, g_cost.min(axis=0))
         landing_values = np.append(values[: self.n_free], 0.0)
         for _ in range(self.opts.max_value_iterations):
             d = self.envelope(landing_values)
@@ -271,17 +284,20 @@ class _ValueLattice:
     def fallback_values(self, traj: _Traj) -> FloatArray:
         """Approximate value of arbitrary particles from the solved lattice (snapped samples)."""
         n_idx, n_cost = self.snap(traj.samples)
-        via = np.min(n_cost + self.d_nodes[n_idx], axis=0)
-        finish = np.where(traj.reaches, 0.0, np.inf)
-        return np.minimum(np.minimum(finish, self.goal_flight(traj.samples).min(axis=0)), via)
+        via = np.min(n_cost + traj.time_cost + self.d_nodes[n_idx], axis=0)
+        direct = np.min(self.goal_flight(traj.samples) + traj.time_cost, axis=0)
+        return np.minimum(np.minimum(traj.finish, direct), via)
 
-    def best_takeoff(self, samples: FloatArray) -> tuple[float, int, int]:
-        """Exact best ``(value, sample index, landing index)`` from one particle's ``(S + 1, 2)`` samples."""
+    def best_takeoff(self, samples: FloatArray, time_cost: FloatArray) -> tuple[float, int, int]:
+        """Exact best ``(value, sample index, landing index)`` from one particle's ``(S + 1, 2)`` samples.
+
+        ``time_cost (S + 1,)`` is the price of drifting to each sample.
+        """
         valid = np.flatnonzero(np.isfinite(samples[:, 0]))
         if valid.size == 0:
             return math.inf, -1, -1
         # Upper bound: straight to the goal from the best sample; landings worth more cannot help.
-        g = self.goal_flight(samples[valid])
+        g = self.goal_flight(samples[valid]) + time_cost[valid]
         k = int(np.argmin(g))
         best = (float(g[k]), int(valid[k]), self.n_free)
         cand = np.flatnonzero(self.arrival < best[0])
@@ -293,6 +309,8 @@ class _ValueLattice:
         for lo in range(0, valid.size, chunk):
             rows = valid[lo : lo + chunk]
             z = samples[rows]
+            if float(time_cost[rows].min()) >= best[0]:
+                continue
             dist = np.hypot(z[:, None, 0] - lands[None, :, 0], z[:, None, 1] - lands[None, :, 1])
             if self.problem.space.flights_avoid_obstacles:
                 shape = (z.shape[0], lands.shape[0], 2)
@@ -300,7 +318,7 @@ class _ValueLattice:
                 dist = np.where(ok, dist, np.inf)
             # Zero-length "flights" (landing where one already is) are not moves.
             dist = np.where((dist <= self.leg) & (dist > 1e-6), dist, np.inf)
-            total = dist + arrive[None, :]
+            total = dist + arrive[None, :] + time_cost[rows, None]
             k = int(np.argmin(total))
             v = float(total.flat[k])
             if v < best[0]:
@@ -319,18 +337,19 @@ def _extract(
     legs: list[_Leg] = []
     samples = traj.samples[:, particle]
     steps = traj.steps[:, particle]
-    reaches = bool(traj.reaches[particle])
+    tcost = traj.time_cost[:, particle]
+    finish = float(traj.finish[particle])
     goal_step = int(traj.goal_step[particle])
     promised = math.inf
     for _ in range(max_flights):
-        if reaches:
-            legs.append(_Leg(drift_steps=goal_step, landing=None, to_goal=False))
-            return legs
         if legs and not math.isfinite(lattice.leg):
             # Landing and taking off again at once never pays when flights can be any length.
             samples = samples.copy()
             samples[0] = np.nan
-        v, s, j = lattice.best_takeoff(samples)
+        v, s, j = lattice.best_takeoff(samples, tcost)
+        if finish <= v:
+            legs.append(_Leg(drift_steps=goal_step, landing=None, to_goal=False))
+            return legs
         if not math.isfinite(v):
             return None
         if v > promised + lattice.opts.spacing_m and legs:
@@ -345,7 +364,8 @@ def _extract(
         p = j  # free node j is particle j of the lattice trajectories
         samples = node_traj.samples[:, p]
         steps = node_traj.steps[:, p]
-        reaches = bool(node_traj.reaches[p])
+        tcost = node_traj.time_cost[:, p]
+        finish = float(node_traj.finish[p])
         goal_step = int(node_traj.goal_step[p])
     return _finish_direct(lattice, legs, samples, steps)
 
@@ -406,7 +426,9 @@ def _refine(
     leg = lattice.leg
     no_fly = problem.space.flights_avoid_obstacles
 
-    def link(samples: FloatArray, targets: FloatArray, target_values: FloatArray) -> tuple[FloatArray, IntArray, IntArray]:
+    def link(
+        samples: FloatArray, tcost: FloatArray, targets: FloatArray, target_values: FloatArray
+    ) -> tuple[FloatArray, IntArray, IntArray]:
         """Best (value, sample, target) for each particle: ``samples (S+1, P, 2)`` to ``targets (C, 2)``.
 
         Samples that cannot beat the particle's best bound (distance to the cloud's centre minus its radius)
@@ -426,8 +448,8 @@ def _refine(
         ey = samples[..., 1] - centre[1]
         dc = np.sqrt(ex * ex + ey * ey)
         dc[~np.isfinite(dc)] = np.inf
-        bound = (dc + radius).min(axis=0) + u_hi
-        keep = (dc - radius + u_lo <= bound[None, :]) & np.isfinite(dc)
+        bound = (dc + radius + tcost).min(axis=0) + u_hi
+        keep = (dc - radius + u_lo + tcost <= bound[None, :]) & np.isfinite(dc)
         p_idx, s_idx = np.nonzero(keep.T)
         if p_idx.size == 0:
             return out_v, out_s, out_c
@@ -438,7 +460,7 @@ def _refine(
             shape = (z.shape[0], targets.shape[0], 2)
             ok = problem.space.flight_valid(np.broadcast_to(z[:, None, :], shape), np.broadcast_to(targets[None], shape))
             dist[~ok] = np.inf
-        total = dist + target_values[None, :]
+        total = dist + target_values[None, :] + tcost[s_idx, p_idx][:, None]
         c_best = np.argmin(total, axis=1)
         v_best = total[np.arange(total.shape[0]), c_best]
         order = np.lexsort((v_best, p_idx))
@@ -455,12 +477,12 @@ def _refine(
     choice[n - 1] = (np.zeros(sizes[-1], int), np.zeros(sizes[-1], int), np.ones(sizes[-1], bool))
     for i in range(n - 2, -1, -1):
         sl = slice(bounds[i], bounds[i + 1])
-        v_link, s_best, c_best = link(traj.samples[:, sl], clouds[i + 1], values[i + 1])
+        v_link, s_best, c_best = link(traj.samples[:, sl], traj.time_cost[:, sl], clouds[i + 1], values[i + 1])
         fb = fallback[sl]
         use_fb = fb <= v_link
         values[i] = np.where(use_fb, fb, v_link)
         choice[i] = (s_best, c_best, use_fb)
-    v0, s0, c0 = link(start_traj.samples[:, -1:], clouds[0], values[0])
+    v0, s0, c0 = link(start_traj.samples[:, -1:], start_traj.time_cost[:, -1:], clouds[0], values[0])
     fb0 = lattice.values[-1]
     if fb0 <= v0[0]:
         return None
@@ -556,6 +578,8 @@ def plan_lattice(
         steps=traj.steps[:, start:],
         reaches=traj.reaches[start:],
         goal_step=traj.goal_step[start:],
+        time_cost=traj.time_cost[:, start:],
+        finish=traj.finish[start:],
     )
     extent = opts.spacing_m
     for _ in range(opts.refine_rounds):
@@ -564,7 +588,7 @@ def plan_lattice(
         if refined is None:
             continue
         path = _build_path(problem, refined)
-        if _reaches(problem, path) and path.flight_distance_m < best_path.flight_distance_m - 1e-9:
+        if _reaches(problem, path) and objective(problem, path) < objective(problem, best_path) - 1e-9:
             best_path, legs = path, refined
     ok = _reaches(problem, best_path)
     energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
@@ -576,10 +600,15 @@ def plan_lattice(
         compute_s=time.perf_counter() - tic,
         iterations=int(lattice.free_idx.size),
         solutions=1 if ok else 0,
-        cost=energy,
+        cost=objective(problem, best_path),
         message=f"lattice {opts.spacing_m:g} m ({lattice.free_idx.size} free nodes), "
         f"{best_path.hops_m().shape[0]} flight(s), value {problem.energy.flight_energy_wh(lattice.values[-1]):.2f} Wh",
     )
+
+
+def objective(problem: DriftProblem, path: DriftPath) -> float:
+    """What the lattice planner minimizes: flight energy plus the price of time, Wh."""
+    return float(problem.energy.flight_energy_wh(path.flight_distance_m)) + problem.time_weight_wh_per_h * path.duration_s / 3600.0
 
 
 def _reaches(problem: DriftProblem, path: DriftPath) -> bool:

@@ -59,6 +59,10 @@ class DriftProblem:
         the thesis accounts its paths (consecutive hops merged into one straight flight).
     t0_s : float
         Start time (matters for time-dependent fields).
+    time_weight_wh_per_h : float
+        Price of time in the oceanloc planners' objective, Wh per hour of path: with 0 (the thesis, which
+        reports flight energy only) drifting is free however long it takes; in closed circulations
+        (gyres) a small price stops plans that circle for days to save a few watt-hours.
     """
 
     space: DriftSpace
@@ -71,6 +75,7 @@ class DriftProblem:
     horizon_s: float = 24 * 3600.0
     max_leg_m: float | None = None
     t0_s: float = 0.0
+    time_weight_wh_per_h: float = 0.0
 
     def __post_init__(self) -> None:
         start = np.asarray(self.start_m, dtype=float).reshape(2)
@@ -81,6 +86,8 @@ class DriftProblem:
             raise ConfigError(f"goal tolerance must be positive, got {self.goal_tolerance_m}")
         if not self.horizon_s > 0:
             raise ConfigError(f"planning horizon must be positive, got {self.horizon_s}")
+        if not self.time_weight_wh_per_h >= 0:
+            raise ConfigError(f"time weight must not be negative, got {self.time_weight_wh_per_h}")
         if self.max_leg_m is not None and not self.max_leg_m > 0:
             raise ConfigError(f"max_leg_m must be positive or None, got {self.max_leg_m}")
         object.__setattr__(self, "start_m", start)
@@ -90,6 +97,11 @@ class DriftProblem:
     def horizon_steps(self) -> int:
         """Drift steps in the horizon."""
         return max(int(round(self.horizon_s / self.propagator.dt_s)), 1)
+
+    @property
+    def time_weight_m_per_s(self) -> float:
+        """The time price in metres of flight per second (the lattice planner's unit)."""
+        return self.time_weight_wh_per_h / 3600.0 / self.energy.flight_wh_per_m
 
     @property
     def direct_flight_m(self) -> float:
@@ -204,4 +216,5 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
         hdop=hdop,
         horizon_s=scenario.horizon_s,
         max_leg_m=scenario.max_leg_m,
+        time_weight_wh_per_h=scenario.time_weight_wh_per_h,
     )
