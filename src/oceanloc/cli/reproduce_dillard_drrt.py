@@ -35,6 +35,7 @@ def dillard_drrt(
     fields: int = typer.Option(20, "--fields", min=0, help="Random obstacle fields (the thesis' generator); 0 skips."),
     field_runs: int = typer.Option(10, "--field-runs", min=1, help="Runs per planner and random field."),
     iterations: int = typer.Option(25_000, "--iterations", min=1, help="Iterations of the optimality-seeking mode."),
+    reference_spacing: float = typer.Option(50.0, "--reference-spacing", min=10.0, help="Lattice spacing (m) of the best-achievable reference."),
     workers: int | None = typer.Option(None, "--workers", min=1, help="Local worker processes (default: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address or local:N."),
 ) -> None:
@@ -48,7 +49,14 @@ def dillard_drrt(
 
     with open_executor(scheduler, workers) as executor:
         report = reproduce_dillard_drrt(
-            runs, seed, fields=fields, field_runs=field_runs, iterations=iterations, executor=executor, progress=progress
+            runs,
+            seed,
+            fields=fields,
+            field_runs=field_runs,
+            iterations=iterations,
+            reference_spacing_m=reference_spacing,
+            executor=executor,
+            progress=progress,
         )
     _print_report(report, runs, iterations)
     if json_path is not None:
@@ -83,7 +91,7 @@ def _print_report(report: DillardReport, runs: int, iterations: int) -> None:
         f"(saving {100 * (1 - report.best_achievable_wh / report.direct_flight_wh):.1f}%)"
     )
     console.print(f"units: {report.convention}")
-    console.print(f"{reference_options_note()}; thesis compute times: MATLAB, Core i7-2600 (mean +- std)")
+    console.print(f"{reference_options_note(report.reference_options)}; thesis compute times: MATLAB, Core i7-2600 (mean +- std)")
     if report.fields:
         ft = Table(title=f"Across {report.field_best_wh.size} random fields (the thesis' generator)")
         for col in ("planner", "success", "mean saving", "worst field saving", "/ best (mean over fields)", "compute ms (median)"):

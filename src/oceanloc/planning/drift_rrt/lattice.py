@@ -104,13 +104,23 @@ class _Traj:
     goal_step: IntArray  # (P,)
     time_cost: FloatArray  # (S + 1, P) price of the drift time to each sample, metres of flight
     finish: FloatArray  # (P,) price of drifting into the goal disk (inf if the drift misses it)
+    goal_cost: FloatArray  # (S + 1, P) flight from each sample straight to the goal (inf if not allowed)
 
 
 @dataclass(frozen=True, slots=True)
 class _Leg:
     drift_steps: int
+    takeoff: FloatArray | None  # where the drift ends (exact, from the rollout); None: drift into the goal
     landing: FloatArray | None  # None: the drift itself ends in the goal disk
     to_goal: bool
+
+
+def _legs_objective(problem: DriftProblem, legs: list[_Leg]) -> float:
+    """Flight energy plus the price of time of a plan, from its legs (no re-simulation needed)."""
+    flown = sum(float(np.linalg.norm(leg.landing - leg.takeoff)) for leg in legs if leg.landing is not None and leg.takeoff is not None)
+    steps = sum(leg.drift_steps for leg in legs)
+    hours = (steps * problem.propagator.dt_s + flown / problem.energy.flight_speed_mps) / 3600.0
+    return float(problem.energy.flight_energy_wh(flown)) + problem.time_weight_wh_per_h * hours
 
 
 def _trajectories(problem: DriftProblem, points: FloatArray, stride: int) -> _Traj:
@@ -129,7 +139,9 @@ def _trajectories(problem: DriftProblem, points: FloatArray, stride: int) -> _Tr
     price = problem.time_weight_m_per_s * problem.propagator.dt_s
     time_cost = steps * price
     finish = np.where(roll.reaches_goal, roll.goal_step * price, np.inf)
+    goal_cost = _goal_flight(problem, samples)
     return _Traj(
+        goal_cost=goal_cost,
         points=points,
         samples=samples,
         steps=steps,
@@ -138,6 +150,22 @@ def _trajectories(problem: DriftProblem, points: FloatArray, stride: int) -> _Tr
         time_cost=time_cost,
         finish=finish,
     )
+
+
+def _goal_flight(problem: DriftProblem, z: FloatArray) -> FloatArray:
+    """Flight distance from ``(..., 2)`` points straight to the goal: ``inf`` for NaN points, beyond one leg,
+    or across a no-fly obstacle."""
+    goal = problem.goal_m
+    ex = z[..., 0] - goal[0]
+    ey = z[..., 1] - goal[1]
+    d = np.sqrt(ex * ex + ey * ey)
+    d[~np.isfinite(d)] = np.inf
+    if problem.space.flights_avoid_obstacles:
+        ok = problem.space.flight_valid(np.where(np.isfinite(z), z, 0.0), goal)
+        d = np.where(ok, d, np.inf)
+    if problem.max_leg_m is not None:
+        d[d > problem.max_leg_m] = np.inf
+    return d
 
 
 class _ValueLattice:
@@ -181,14 +209,7 @@ class _ValueLattice:
 
     def goal_flight(self, z: FloatArray) -> FloatArray:
         """Exact flight distance from ``(..., 2)`` points straight to the goal (``inf`` beyond a leg, or NaN)."""
-        ex = z[..., 0] - self.goal[0]
-        ey = z[..., 1] - self.goal[1]
-        d = np.sqrt(ex * ex + ey * ey)
-        d[~np.isfinite(d)] = np.inf
-        if self.problem.space.flights_avoid_obstacles:
-            ok = self.problem.space.flight_valid(np.where(np.isfinite(z), z, 0.0), self.goal)
-            d = np.where(ok, d, np.inf)
-        return np.where(d <= self.leg, d, np.inf)
+        return _goal_flight(self.problem, z)
 
     # -- envelope ---------------------------------------------------------------------------------------
     def build_envelope(self) -> None:
@@ -262,20 +283,27 @@ class _ValueLattice:
         self.build_envelope()
         n_idx, n_cost = self.snap(traj.samples)
         n_cost = n_cost + traj.time_cost
-        g_cost = self.goal_flight(traj.samples) + traj.time_cost
+        g_cost = traj.goal_cost + traj.time_cost
         values = np.minimum(traj.finish, g_cost.min(axis=0))
         landing_values = np.append(values[: self.n_free], 0.0)
+        d = self.envelope(landing_values)
+        incremental = self.opts.envelope == "dense" and not math.isfinite(self.leg)
         for _ in range(self.opts.max_value_iterations):
-            d = self.envelope(landing_values)
             via = np.min(n_cost + d[n_idx], axis=0)
             new = np.minimum(values, via)
-            changed = np.any(new < values - 1e-6)
+            changed = np.flatnonzero(new[: self.n_free] < values[: self.n_free] - 1e-6)
             values = new
             landing_values = np.append(values[: self.n_free], 0.0)
-            if not changed:
+            if changed.size == 0:
                 break
+            if incremental:
+                # Values only decrease, so only the columns of the landings that changed can lower D.
+                cols = self._dense[:, changed] + landing_values[changed].astype(np.float32)[None, :]
+                d[:-1] = np.minimum(d[:-1], cols.min(axis=1))
+            else:
+                d = self.envelope(landing_values)
         self.values = values
-        self.d_nodes = self.envelope(landing_values)
+        self.d_nodes = d if incremental else self.envelope(landing_values)
         # What a landing point is worth on arrival: drift on (V) or fly on (D).
         self.arrival = landing_values.copy()
         self.arrival[: self.n_free] = np.minimum(landing_values[: self.n_free], self.d_nodes[self.free_idx])
@@ -285,19 +313,20 @@ class _ValueLattice:
         """Approximate value of arbitrary particles from the solved lattice (snapped samples)."""
         n_idx, n_cost = self.snap(traj.samples)
         via = np.min(n_cost + traj.time_cost + self.d_nodes[n_idx], axis=0)
-        direct = np.min(self.goal_flight(traj.samples) + traj.time_cost, axis=0)
+        direct = np.min(traj.goal_cost + traj.time_cost, axis=0)
         return np.minimum(np.minimum(traj.finish, direct), via)
 
-    def best_takeoff(self, samples: FloatArray, time_cost: FloatArray) -> tuple[float, int, int]:
+    def best_takeoff(self, samples: FloatArray, time_cost: FloatArray, goal_cost: FloatArray) -> tuple[float, int, int]:
         """Exact best ``(value, sample index, landing index)`` from one particle's ``(S + 1, 2)`` samples.
 
-        ``time_cost (S + 1,)`` is the price of drifting to each sample.
+        ``time_cost (S + 1,)`` is the price of drifting to each sample, ``goal_cost (S + 1,)`` the flight from
+        it straight to the goal.
         """
         valid = np.flatnonzero(np.isfinite(samples[:, 0]))
         if valid.size == 0:
             return math.inf, -1, -1
         # Upper bound: straight to the goal from the best sample; landings worth more cannot help.
-        g = self.goal_flight(samples[valid]) + time_cost[valid]
+        g = goal_cost[valid] + time_cost[valid]
         k = int(np.argmin(g))
         best = (float(g[k]), int(valid[k]), self.n_free)
         cand = np.flatnonzero(self.arrival < best[0])
@@ -338,6 +367,7 @@ def _extract(
     samples = traj.samples[:, particle]
     steps = traj.steps[:, particle]
     tcost = traj.time_cost[:, particle]
+    gcost = traj.goal_cost[:, particle]
     finish = float(traj.finish[particle])
     goal_step = int(traj.goal_step[particle])
     promised = math.inf
@@ -346,9 +376,9 @@ def _extract(
             # Landing and taking off again at once never pays when flights can be any length.
             samples = samples.copy()
             samples[0] = np.nan
-        v, s, j = lattice.best_takeoff(samples, tcost)
+        v, s, j = lattice.best_takeoff(samples, tcost, gcost)
         if finish <= v:
-            legs.append(_Leg(drift_steps=goal_step, landing=None, to_goal=False))
+            legs.append(_Leg(drift_steps=goal_step, takeoff=None, landing=None, to_goal=False))
             return legs
         if not math.isfinite(v):
             return None
@@ -358,13 +388,14 @@ def _extract(
         promised = v
         landing = lattice.landings[j]
         is_goal = j == lattice.n_free
-        legs.append(_Leg(drift_steps=int(steps[s]), landing=landing, to_goal=is_goal))
+        legs.append(_Leg(drift_steps=int(steps[s]), takeoff=samples[s].copy(), landing=landing, to_goal=is_goal))
         if is_goal:
             return legs
         p = j  # free node j is particle j of the lattice trajectories
         samples = node_traj.samples[:, p]
         steps = node_traj.steps[:, p]
         tcost = node_traj.time_cost[:, p]
+        gcost = node_traj.goal_cost[:, p]
         finish = float(node_traj.finish[p])
         goal_step = int(node_traj.goal_step[p])
     return _finish_direct(lattice, legs, samples, steps)
@@ -384,15 +415,15 @@ def _finish_direct(lattice: _ValueLattice, legs: list[_Leg], samples: FloatArray
         k = n + extra
         frac = np.arange(1, k)[:, None] / k
         stops = start[None, :] + frac * (lattice.goal - start)[None, :]
-        if stops.shape[0] == 0 or bool(np.all(space.is_valid(stops))):
+        points = np.vstack([start, stops, lattice.goal])
+        if bool(np.all(space.is_valid(stops))) and bool(np.all(space.flight_valid(points[:-1], points[1:]))):
             break
     else:
         return None
-    legs.append(_Leg(drift_steps=int(steps[s]), landing=stops[0] if stops.shape[0] else lattice.goal, to_goal=stops.shape[0] == 0))
-    for i in range(1, stops.shape[0]):
-        legs.append(_Leg(drift_steps=0, landing=stops[i], to_goal=False))
-    if stops.shape[0]:
-        legs.append(_Leg(drift_steps=0, landing=lattice.goal, to_goal=True))
+    points = [start, *list(stops), lattice.goal]
+    legs.append(_Leg(drift_steps=int(steps[s]), takeoff=start.copy(), landing=points[1], to_goal=len(points) == 2))
+    for i in range(1, len(points) - 1):
+        legs.append(_Leg(drift_steps=0, takeoff=points[i], landing=points[i + 1], to_goal=i == len(points) - 2))
     return legs
 
 
@@ -487,7 +518,14 @@ def _refine(
     if fb0 <= v0[0]:
         return None
     # Forward pass.
-    out: list[_Leg] = [_Leg(drift_steps=int(start_traj.steps[s0[0], -1]), landing=clouds[0][c0[0]], to_goal=False)]
+    out: list[_Leg] = [
+        _Leg(
+            drift_steps=int(start_traj.steps[s0[0], -1]),
+            takeoff=start_traj.samples[s0[0], -1].copy(),
+            landing=clouds[0][c0[0]],
+            to_goal=False,
+        )
+    ]
     cur = int(c0[0])
     for i in range(n):
         s_best, c_best, use_fb = choice[i]
@@ -498,7 +536,14 @@ def _refine(
                 return None
             out.extend(tail)
             return out
-        out.append(_Leg(drift_steps=int(traj.steps[s_best[cur], p]), landing=clouds[i + 1][c_best[cur]], to_goal=False))
+        out.append(
+            _Leg(
+                drift_steps=int(traj.steps[s_best[cur], p]),
+                takeoff=traj.samples[s_best[cur], p].copy(),
+                landing=clouds[i + 1][c_best[cur]],
+                to_goal=False,
+            )
+        )
         cur = int(c_best[cur])
     return out
 
@@ -522,8 +567,9 @@ def _build_path(problem: DriftProblem, legs: list[_Leg]) -> DriftPath:
     path = DriftPath.from_segments(
         segments, t0_s=problem.t0_s, dt_s=prop.dt_s, flight_speed_mps=problem.energy.flight_speed_mps
     )
-    # Flights of any length: consecutive flights are one straight flight. With legs, each leg lands.
-    return path.merged() if problem.max_leg_m is None else path
+    # Flights of any length: consecutive flights are one straight flight (unless obstacles are no-fly zones,
+    # where the chain goes around them). With legs, each leg lands.
+    return path.merged() if problem.max_leg_m is None and not space.flights_avoid_obstacles else path
 
 
 def plan_lattice(
@@ -571,7 +617,6 @@ def plan_lattice(
             compute_s=time.perf_counter() - tic,
             message="no drift/flight sequence reaches the goal from the start",
         )
-    best_path = _build_path(problem, legs)
     start_traj = _Traj(
         points=points[start:],
         samples=traj.samples[:, start:],
@@ -580,16 +625,19 @@ def plan_lattice(
         goal_step=traj.goal_step[start:],
         time_cost=traj.time_cost[:, start:],
         finish=traj.finish[start:],
+        goal_cost=traj.goal_cost[:, start:],
     )
+    best_cost = _legs_objective(problem, legs)
     extent = opts.spacing_m
     for _ in range(opts.refine_rounds):
         refined = _refine(lattice, problem, start_traj, traj, legs, opts, extent)
         extent /= 4.0
         if refined is None:
             continue
-        path = _build_path(problem, refined)
-        if _reaches(problem, path) and objective(problem, path) < objective(problem, best_path) - 1e-9:
-            best_path, legs = path, refined
+        cost = _legs_objective(problem, refined)
+        if cost < best_cost - 1e-9:
+            legs, best_cost = refined, cost
+    best_path = _build_path(problem, legs)
     ok = _reaches(problem, best_path)
     energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
     return PlanResult(

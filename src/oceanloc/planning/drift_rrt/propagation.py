@@ -12,6 +12,7 @@ or RK4) and offers
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,11 +114,14 @@ class DriftPropagator:
         """``(n + 1, 2)`` every step of one drift, stopping early where it would become invalid."""
         x, y = (float(v) for v in np.asarray(start_m, dtype=float))
         out = [(x, y)]
+        step = step_function(self.method)
+        field, dt, valid = self.field, self.dt_s, space.is_valid_xy
         for k in range(n_steps):
-            xn, yn = self.step_xy(x, y, t0_s + k * self.dt_s)
-            if not (np.isfinite(xn) and np.isfinite(yn) and space.is_valid_xy(float(xn), float(yn))):
+            xn, yn = step(field, x, y, t0_s + k * dt, dt)
+            xn, yn = float(xn), float(yn)
+            if not (math.isfinite(xn) and math.isfinite(yn) and valid(xn, yn)):
                 break
-            x, y = float(xn), float(yn)
+            x, y = xn, yn
             out.append((x, y))
         return np.asarray(out)
 

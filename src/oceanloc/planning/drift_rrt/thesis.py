@@ -382,7 +382,9 @@ class _DrRrtStar:
         step_len = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         dts = np.where(flight, step_len / self.p.energy.flight_speed_mps, self.p.propagator.dt_s)
         times[1:] = self.T[0] + np.cumsum(dts)
-        return DriftPath(points_m=pts, times_s=times, flight=flight).merged()
+        path = DriftPath(points_m=pts, times_s=times, flight=flight)
+        # The thesis merges consecutive hops into one flight; over no-fly zones the chain must stay.
+        return path if self.p.space.flights_avoid_obstacles else path.merged()
 
     def _path_energy(self, node: int) -> float:
         return float(self.p.energy.flight_energy_wh(self._path(node).flight_distance_m))
