@@ -124,9 +124,8 @@ def open_current_netcdf(
         v_da = _find_velocity(ds, p, v_var, NORTHWARD_NAMES, NORTHWARD_VARS, "northward")
         if u_da.dims != v_da.dims:
             raise DataError(f"{p}: {u_da.name} has dimensions {u_da.dims} but {v_da.name} has {v_da.dims}")
-        scale = _velocity_scale(p, u_da)
-        if _velocity_scale(p, v_da) != scale:
-            raise DataError(f"{p}: {u_da.name} and {v_da.name} have different units")
+        u_scale = _velocity_scale(p, u_da)
+        v_scale = _velocity_scale(p, v_da)
         dims = _classify_dims(ds, p, u_da)
         notes: list[str] = []
         if dims["z"] is not None:
@@ -140,8 +139,8 @@ def open_current_netcdf(
             notes.append(f"level {k} of '{zname}' ({zvals[k]:g})")
         tname = dims["t"]
         order = [d for d in (tname, dims["y"], dims["x"]) if d is not None]
-        u = np.asarray(u_da.transpose(*order).values, dtype=float) * scale
-        v = np.asarray(v_da.transpose(*order).values, dtype=float) * scale
+        u = np.asarray(u_da.transpose(*order).values, dtype=float) * u_scale
+        v = np.asarray(v_da.transpose(*order).values, dtype=float) * v_scale
         if tname is None:
             u, v = u[None], v[None]
             times, t_origin = None, None

@@ -157,7 +157,9 @@ def integrate(
     for k in range(1, n_steps + 1):
         if active.size:
             xn, yn = step(field, x[active], y[active], times[k - 1], dt_s)
-            defined = np.isfinite(xn) & np.isfinite(yn)
+            # A particle never steps onto a point where the current is undefined (land, off the grid).
+            un, vn = field.velocity_xy(xn, yn, times[k])
+            defined = np.isfinite(xn) & np.isfinite(yn) & np.isfinite(un) & np.isfinite(vn)
             ok = defined.copy()
             if is_free is not None and ok.any():
                 ok[ok] = is_free(xn[ok], yn[ok])

@@ -313,7 +313,7 @@ def _segment_hits_box(a: FloatArray, b: FloatArray, x0: float, x1: float, y0: fl
         q_hi = hi - a[..., axis]
         parallel = p == 0
         ok &= ~(parallel & ((q_lo <= 0) | (q_hi <= 0)))
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             ta = np.where(parallel, -np.inf, (lo - a[..., axis]) / np.where(parallel, 1.0, p))
             tb = np.where(parallel, np.inf, (hi - a[..., axis]) / np.where(parallel, 1.0, p))
         t_enter = np.minimum(ta, tb)

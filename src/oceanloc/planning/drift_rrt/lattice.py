@@ -30,6 +30,7 @@ trajectory is integrated from the problem's start time.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -437,23 +438,33 @@ def _refine(
     half_extent_m: float,
 ) -> list[_Leg] | None:
     """Backward dynamic programme over clouds of candidate landing points around ``legs``' landings."""
+    # Landing points of the plan, then the goal itself: a landing just upstream of the goal disk that
+    # drifts in can beat flying to the goal (its cloud is the last stage).
     stages = [leg.landing for leg in legs if leg.landing is not None and not leg.to_goal]
-    if not stages:
-        return None
     w = opts.cloud_half_width
     ticks = np.linspace(-half_extent_m, half_extent_m, 2 * w + 1)
     ox, oy = np.meshgrid(ticks, ticks)
     offsets = np.column_stack([ox.ravel(), oy.ravel()])
     clouds = []
-    for q in stages:
+    for q in [*stages, problem.goal_m]:
         c = q[None, :] + offsets
         c = c[problem.space.is_valid(c)]
         clouds.append(c)
     sizes = [c.shape[0] for c in clouds]
-    allpts = np.concatenate(clouds, axis=0)
-    traj = _trajectories(problem, allpts, opts.stride)
-    fallback = lattice.fallback_values(traj)
     bounds = np.cumsum([0, *sizes])
+    if stages:
+        traj = _trajectories(problem, np.concatenate(clouds[:-1], axis=0), opts.stride)
+        fallback = lattice.fallback_values(traj)
+    else:
+        traj = start_traj
+        fallback = np.zeros(0)
+    # The goal cloud only matters through points that drift into the goal disk, which they do soon:
+    # a short rollout (long enough to cross the cloud a few times at the current near the goal).
+    gu, gv = problem.propagator.field.velocity_xy(float(problem.goal_m[0]), float(problem.goal_m[1]), problem.t0_s)
+    speed = math.hypot(gu, gv) if math.isfinite(gu + gv) else 0.0
+    reach_s = 4.0 * (half_extent_m + problem.goal_tolerance_m) / max(speed, 0.05)
+    short = dataclasses.replace(problem, horizon_s=min(problem.horizon_s, reach_s))
+    goal_traj = _trajectories(short, clouds[-1], opts.stride)
     leg = lattice.leg
     no_fly = problem.space.flights_avoid_obstacles
 
@@ -501,11 +512,10 @@ def _refine(
         out_c[p_idx[first]] = c_best[first]
         return out_v, out_s, out_c
 
-    n = len(stages)
+    n = len(stages) + 1
     values: list[FloatArray] = [np.empty(0)] * n
     choice: list[tuple[IntArray, IntArray, BoolArray]] = [(np.empty(0, int), np.empty(0, int), np.empty(0, bool))] * n
-    values[n - 1] = fallback[bounds[n - 1] : bounds[n]]
-    choice[n - 1] = (np.zeros(sizes[-1], int), np.zeros(sizes[-1], int), np.ones(sizes[-1], bool))
+    values[n - 1] = goal_traj.finish
     for i in range(n - 2, -1, -1):
         sl = slice(bounds[i], bounds[i + 1])
         v_link, s_best, c_best = link(traj.samples[:, sl], traj.time_cost[:, sl], clouds[i + 1], values[i + 1])
@@ -514,8 +524,7 @@ def _refine(
         values[i] = np.where(use_fb, fb, v_link)
         choice[i] = (s_best, c_best, use_fb)
     v0, s0, c0 = link(start_traj.samples[:, -1:], start_traj.time_cost[:, -1:], clouds[0], values[0])
-    fb0 = lattice.values[-1]
-    if fb0 <= v0[0]:
+    if not math.isfinite(v0[0]):
         return None
     # Forward pass.
     out: list[_Leg] = [
@@ -527,7 +536,7 @@ def _refine(
         )
     ]
     cur = int(c0[0])
-    for i in range(n):
+    for i in range(n - 1):
         s_best, c_best, use_fb = choice[i]
         p = bounds[i] + cur
         if use_fb[cur]:
@@ -545,6 +554,8 @@ def _refine(
             )
         )
         cur = int(c_best[cur])
+    # In the goal cloud: drift into the disk.
+    out.append(_Leg(drift_steps=int(goal_traj.goal_step[cur]), takeoff=None, landing=None, to_goal=False))
     return out
 
 

@@ -145,11 +145,17 @@ class SearchTree:
         Parent of each node (the root is its own parent).
     hop : (N,) bool
         Whether the edge from the parent is a flight.
+    cost : (N,) float
+        Cumulative cost of reaching each node (the planner's objective, IV.15 for DR-RRT*).
+    branch_cost : (N,) float
+        Cost of the edge from the parent.
     """
 
     positions_m: FloatArray
     parent: IntArray
     hop: BoolArray
+    cost: FloatArray
+    branch_cost: FloatArray
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -266,8 +266,9 @@ class _DrRrtStar:
         counter = 0
         last_d: float | None = None
         grad: float | None = None
-        best_node = -1
         best_wh = math.inf
+        best_path: DriftPath | None = None
+        best_cost = math.nan
         solutions = 0
         closest = (math.hypot(self.X[0] - gx, self.Y[0] - gy), 0)
         it = 0
@@ -287,9 +288,10 @@ class _DrRrtStar:
                 if d < tol:
                     solutions += 1
                     self._evaluate_pending()
-                    wh = self._path_energy(node)
+                    path = self._path(node)
+                    wh = self._energy(path)
                     if wh < best_wh:
-                        best_wh, best_node = wh, node
+                        best_wh, best_path, best_cost = wh, path, self.cum[node]
                     if single:
                         break
                 if last_d is not None:
@@ -339,13 +341,14 @@ class _DrRrtStar:
                 closest = (dnew, new)
             if dnew < tol or (nx == gx and ny == gy):
                 solutions += 1
-                wh = self._path_energy(new)
+                path = self._path(new)
+                wh = self._energy(path)
                 if wh < best_wh:
-                    best_wh, best_node = wh, new
+                    best_wh, best_path, best_cost = wh, path, self.cum[new]
                 if single:
                     break
             self._rewire(new)
-        return self._result(best_node, best_wh, closest[1], it, solutions)
+        return self._result(best_path, best_wh, best_cost, closest[1], it, solutions)
 
     def _rewire(self, new: int) -> None:
         o = self.opts
@@ -386,30 +389,34 @@ class _DrRrtStar:
         # The thesis merges consecutive hops into one flight; over no-fly zones the chain must stay.
         return path if self.p.space.flights_avoid_obstacles else path.merged()
 
-    def _path_energy(self, node: int) -> float:
-        return float(self.p.energy.flight_energy_wh(self._path(node).flight_distance_m))
+    def _energy(self, path: DriftPath) -> float:
+        return float(self.p.energy.flight_energy_wh(path.flight_distance_m))
 
-    def _result(self, best: int, best_wh: float, closest: int, iterations: int, solutions: int) -> PlanResult:
+    def _result(
+        self, best: DriftPath | None, best_wh: float, best_cost: float, closest: int, iterations: int, solutions: int
+    ) -> PlanResult:
+        """The cheapest solution as it was when found (later rewiring may change the tree behind it)."""
         elapsed = time.perf_counter() - self.tic
+        self._evaluate_pending()
         tree = None
         if self.opts.keep_tree:
             tree = SearchTree(
                 positions_m=np.column_stack([self.X, self.Y]),
                 parent=np.asarray(self.parent, dtype=np.int64),
                 hop=np.asarray(self.hop, dtype=bool),
+                cost=np.asarray(self.cum),
+                branch_cost=np.asarray(self.branch),
             )
-        self._evaluate_pending()
-        if best >= 0:
-            path = self._path(best)
+        if best is not None:
             return PlanResult(
                 status=PlanStatus.EXACT,
-                path=path,
+                path=best,
                 flight_energy_wh=best_wh,
                 direct_flight_wh=self.p.direct_flight_wh,
                 compute_s=elapsed,
                 iterations=iterations,
                 solutions=solutions,
-                cost=self.cum[best],
+                cost=best_cost,
                 tree=tree,
                 message=f"{solutions} solution(s) in {iterations} iterations, {len(self.X)} nodes",
             )
