@@ -7,7 +7,7 @@ from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(st.floats(-60, 60), st.floats(-179, 179), st.floats(-20_000, 20_000), st.floats(-20_000, 20_000))
 def test_round_trip(lat0, lon0, x, y):
     p = LocalProjection(lat0_deg=lat0, lon0_deg=lon0)

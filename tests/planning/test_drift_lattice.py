@@ -38,7 +38,7 @@ def test_uniform_current_optimum_is_the_cross_stream_distance():
     # Drifting east costs nothing, so the least flight is the cross-stream distance to the goal disk:
     # 1200 m north minus the 50 m tolerance = 1150 m (fly north, then drift into the disk).
     problem = uniform_problem()
-    ours = plan_lattice(problem, np.random.default_rng(0))
+    ours = plan_lattice(problem, np.random.default_rng(0), options=LatticeOptions(refine_rounds=2))
     flown = ours.path.flight_distance_m
     # Two refinement rounds place the landing within a sixteenth of the 300 m lattice.
     assert 1150.0 - 1e-6 <= flown <= 1150.0 + 20.0

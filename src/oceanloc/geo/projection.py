@@ -3,8 +3,8 @@
 Gridded currents on longitude/latitude are resampled once onto a regular metric grid in this frame
 (:mod:`oceanloc.models.currents_cf`), so planners work in metres; plans are mapped back to longitude and
 latitude for GeoJSON output. The conversion is pymap3d's geodetic <-> ENU on the WGS84 ellipsoid at zero
-height (the sea surface, to the ellipsoid's approximation; over tens of kilometres the tangent plane's
-vertical offset is irrelevant to horizontal positions).
+height (the sea surface, to the ellipsoid's approximation): a surface point maps to the east and north
+coordinates of its position in the tangent plane's frame, and back.
 """
 
 from __future__ import annotations
@@ -44,10 +44,19 @@ class LocalProjection:
         return np.asarray(e, dtype=float), np.asarray(n, dtype=float)
 
     def to_lonlat(self, x_m: ArrayLike, y_m: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """East/north metres to longitude/latitude in degrees (longitude within 180 of the origin's)."""
+        """East/north metres to longitude/latitude in degrees (longitude within 180 of the origin's).
+
+        The inverse of :meth:`to_local`: the sea-surface point (zero ellipsoidal height) whose east/north
+        coordinates are ``(x, y)``; its "up" coordinate (the surface's drop below the tangent plane,
+        about ``-(x^2 + y^2) / 2R``) is found by three Newton steps on the height.
+        """
         x = np.asarray(x_m, dtype=float)
         y = np.asarray(y_m, dtype=float)
-        lat, lon, _ = pymap3d.enu2geodetic(x, y, np.zeros(np.broadcast_shapes(x.shape, y.shape)), self.lat0_deg, self.lon0_deg, 0.0)
+        up = -(x * x + y * y) / (2.0 * 6_371_000.0)
+        for _ in range(3):
+            lat, lon, h = pymap3d.enu2geodetic(x, y, up, self.lat0_deg, self.lon0_deg, 0.0)
+            up = up - np.asarray(h, dtype=float)
+        lat, lon, _ = pymap3d.enu2geodetic(x, y, up, self.lat0_deg, self.lon0_deg, 0.0)
         return _wrap_near(np.asarray(lon, dtype=float), self.lon0_deg), np.asarray(lat, dtype=float)
 
 
