@@ -35,13 +35,16 @@ def _line(label: str, measured: str, target: str, thesis: str = "") -> None:
 
 
 def _shortest_path_visibility(problem: DriftProblem) -> float:
-    """Exact shortest obstacle-free path among rectangles: Dijkstra on the visibility graph of their corners."""
+    """Exact shortest obstacle-free path among rectangles: Dijkstra on the visibility graph of corners."""
     from scipy.sparse.csgraph import dijkstra
 
     eps = 1e-6
     nodes = [problem.start_m, problem.goal_m]
     for a, b, c, d in problem.space.obstacles.rectangles_m:
-        nodes += [np.array(p) for p in ((a - eps, c - eps), (b + eps, c - eps), (b + eps, d + eps), (a - eps, d + eps))]
+        nodes += [
+            np.array(p)
+            for p in ((a - eps, c - eps), (b + eps, c - eps), (b + eps, d + eps), (a - eps, d + eps))
+        ]
     pts = np.array(nodes)
     n = pts.shape[0]
     a = np.broadcast_to(pts[:, None, :], (n, n, 2))
@@ -92,7 +95,10 @@ def main() -> None:
     direct = problem.direct_flight_wh
     print(f"thesis scenario, fixed field; {problem.energy.convention}; direct flight {direct:.2f} Wh")
 
-    single = [plan_thesis(problem, np.random.default_rng(s), options=ThesisOptions(mode="single")) for s in range(SINGLE_RUNS)]
+    single = [
+        plan_thesis(problem, np.random.default_rng(s), options=ThesisOptions(mode="single"))
+        for s in range(SINGLE_RUNS)
+    ]
     t_single = np.median([r.compute_s for r in single])
     e_single = np.mean([r.flight_energy_wh for r in single if r.success])
     _line(
@@ -101,10 +107,20 @@ def main() -> None:
         "<= 50 ms",
         f"thesis {1e3 * THESIS_TABLE4['thesis-single']['compute_s_mean']:.0f} ms (mean)",
     )
-    _line("  success, mean energy, saving", f"{np.mean([r.success for r in single]):.0%}, {e_single:.2f} Wh, {1 - e_single / direct:.1%}", "-", "thesis 38.69 Wh, 22%")
+    _line(
+        "  success, mean energy, saving",
+        f"{np.mean([r.success for r in single]):.0%}, {e_single:.2f} Wh, {1 - e_single / direct:.1%}",
+        "-",
+        "thesis 38.69 Wh, 22%",
+    )
 
     opt = [
-        plan_thesis(problem, np.random.default_rng(s), PlanBudget(max_iterations=25_000), ThesisOptions(mode="optimality-seeking"))
+        plan_thesis(
+            problem,
+            np.random.default_rng(s),
+            PlanBudget(max_iterations=25_000),
+            ThesisOptions(mode="optimality-seeking"),
+        )
         for s in range(OPTIMALITY_RUNS)
     ]
     t_opt = np.median([r.compute_s for r in opt])
@@ -120,7 +136,12 @@ def main() -> None:
     tic = time.perf_counter()
     ref = best_achievable(problem)
     best = ref.flight_energy_wh
-    _line("best achievable (50 m lattice reference)", f"{best:.2f} Wh, {1 - best / direct:.1%}", "-", f"({time.perf_counter() - tic:.0f} s to compute)")
+    _line(
+        "best achievable (50 m lattice reference)",
+        f"{best:.2f} Wh, {1 - best / direct:.1%}",
+        "-",
+        f"({time.perf_counter() - tic:.0f} s to compute)",
+    )
 
     ours = [plan_oceanloc(problem, np.random.default_rng(s)) for s in range(OCEANLOC_RUNS)]
     ok = np.array([r.success for r in ours])
@@ -138,10 +159,18 @@ def main() -> None:
         horizon_s=60.0,
     )
     exact = _shortest_path_visibility(geometric)
-    print(f"\nlike-for-like geometric problem (no current, obstacles are no-fly zones): exact shortest path {exact:.1f} m")
+    print(
+        "\nlike-for-like geometric problem (no current, obstacles are no-fly zones): "
+        f"exact shortest path {exact:.1f} m"
+    )
     geo = [plan_oceanloc(geometric, np.random.default_rng(s)) for s in range(10)]
     lengths = [r.path.flight_distance_m for r in geo if r.success and r.path is not None]
-    _line("  oceanloc lattice, median of 10", f"{np.median(lengths):.1f} m ({np.median(lengths) / exact - 1:+.2%})", "-", f"{1e3 * np.median([r.compute_s for r in geo]):.0f} ms")
+    _line(
+        "  oceanloc lattice, median of 10",
+        f"{np.median(lengths):.1f} m ({np.median(lengths) / exact - 1:+.2%})",
+        "-",
+        f"{1e3 * np.median([r.compute_s for r in geo]):.0f} ms",
+    )
     try:
         import ompl  # noqa: F401
     except ImportError:
@@ -150,7 +179,12 @@ def main() -> None:
     for seconds in (0.1, 1.0):
         runs = [_ompl_rrtstar(geometric, seconds, s + 1) for s in range(5)]
         length = np.nanmedian([r[0] for r in runs])
-        _line(f"  OMPL RRT* {seconds:g} s budget, median of 5", f"{length:.1f} m ({length / exact - 1:+.2%})", "-", f"{1e3 * np.median([r[1] for r in runs]):.0f} ms")
+        _line(
+            f"  OMPL RRT* {seconds:g} s budget, median of 5",
+            f"{length:.1f} m ({length / exact - 1:+.2%})",
+            "-",
+            f"{1e3 * np.median([r[1] for r in runs]):.0f} ms",
+        )
 
 
 if __name__ == "__main__":

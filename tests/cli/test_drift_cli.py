@@ -10,7 +10,18 @@ runner = CliRunner()
 
 def test_drift_plan_writes_figure_csv_and_geojson(tmp_path):
     result = runner.invoke(
-        app, ["drift-plan", "--scenario", "dillard-drift-fixed", "--planner", "thesis-single", "--out", str(tmp_path), "--origin", "-117.2,32.7"]
+        app,
+        [
+            "drift-plan",
+            "--scenario",
+            "dillard-drift-fixed",
+            "--planner",
+            "thesis-single",
+            "--out",
+            str(tmp_path),
+            "--origin",
+            "-117.2,32.7",
+        ],
     )
     assert result.exit_code == 0, result.output
     assert "flight energy" in result.output and "2000" in result.output and "convention" in result.output
@@ -21,7 +32,9 @@ def test_drift_plan_writes_figure_csv_and_geojson(tmp_path):
 
 
 def test_drift_plan_oceanloc_in_international_units(tmp_path):
-    result = runner.invoke(app, ["drift-plan", "--scenario", "dillard-drift-continuous", "--out", str(tmp_path)])
+    result = runner.invoke(
+        app, ["drift-plan", "--scenario", "dillard-drift-continuous", "--out", str(tmp_path)]
+    )
     assert result.exit_code == 0, result.output
     assert "1852" in result.output and "international" in result.output and "exact" in result.output
     assert "no GeoJSON" in result.output
@@ -31,7 +44,22 @@ def test_reproduce_dillard_drrt_json(tmp_path):
     out = tmp_path / "r.json"
     result = runner.invoke(
         app,
-        ["reproduce", "dillard-drrt", "--runs", "2", "--fields", "0", "--iterations", "1500", "--reference-spacing", "200", "--workers", "1", "--json", str(out)],
+        [
+            "reproduce",
+            "dillard-drrt",
+            "--runs",
+            "2",
+            "--fields",
+            "0",
+            "--iterations",
+            "1500",
+            "--reference-spacing",
+            "200",
+            "--workers",
+            "1",
+            "--json",
+            str(out),
+        ],
     )
     assert result.exit_code == 0, result.output
     assert "thesis Table 4" in result.output and "38.69" in result.output
@@ -41,7 +69,21 @@ def test_reproduce_dillard_drrt_json(tmp_path):
 
 
 def test_simulate_drift_follow_and_swap(tmp_path):
-    result = runner.invoke(app, ["simulate", "drift-follow", "--runs", "2", "--workers", "1", "--figures", str(tmp_path), "--json", str(tmp_path / "f.json")])
+    result = runner.invoke(
+        app,
+        [
+            "simulate",
+            "drift-follow",
+            "--runs",
+            "2",
+            "--workers",
+            "1",
+            "--figures",
+            str(tmp_path),
+            "--json",
+            str(tmp_path / "f.json"),
+        ],
+    )
     assert result.exit_code == 0, result.output
     assert "arrival rate" in result.output
     assert json.loads((tmp_path / "f.json").read_text())["runs"] == 2
@@ -53,7 +95,10 @@ def test_simulate_drift_follow_and_swap(tmp_path):
 
 def test_bad_scenario_is_one_line_with_status_2(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
-    bad.write_text('[scenario]\nname = "x"\n[currents]\nkind = "tidal"\n[route]\nstart_m = [0.0, 0.0]\ngoal_m = [1.0, 1.0]\n')
+    bad.write_text(
+        '[scenario]\nname = "x"\n[currents]\nkind = "tidal"\n'
+        "[route]\nstart_m = [0.0, 0.0]\ngoal_m = [1.0, 1.0]\n"
+    )
     with pytest.raises(SystemExit) as info:
         main(["drift-plan", "--scenario", str(bad), "--out", str(tmp_path)])
     assert info.value.code == 2

@@ -31,7 +31,12 @@ def _write(tmp_path, text):
 
 def test_builtins_load_and_stay_out_of_the_survey_list():
     names = builtin_drift_scenarios()
-    assert {"dillard-drift-fixed", "dillard-drift-continuous", "dillard-drift-swap", "dillard-drift-gyre-netcdf"} <= set(names)
+    assert {
+        "dillard-drift-fixed",
+        "dillard-drift-continuous",
+        "dillard-drift-swap",
+        "dillard-drift-gyre-netcdf",
+    } <= set(names)
     assert not any(n.startswith("dillard-drift-") for n in builtin_survey_scenarios())
     for name in names:
         sc = load_drift_scenario(name)
@@ -55,7 +60,11 @@ def test_a_minimal_file(tmp_path):
     [
         ('kind = "uniform"', 'kind = "tidal"', r"\[currents\] field 'kind': must be one of"),
         ("x_m = [400.0, 600.0]", "x_m = [600.0, 400.0]", r"\[map.rectangles\[0\]\] field 'x_m'"),
-        ("start_m = [100.0, 100.0]", "start_m = [500.0, 500.0]", r"\[route\] field 'start_m'.*inside an obstacle"),
+        (
+            "start_m = [100.0, 100.0]",
+            "start_m = [500.0, 500.0]",
+            r"\[route\] field 'start_m'.*inside an obstacle",
+        ),
         ("[route]", "[route]\nspeed = 3", r"\[route\] field 'speed': unknown field"),
         ('kind = "uniform"', 'kind = "netcdf"\npath = "nowhere.nc"', "current file not found"),
     ],

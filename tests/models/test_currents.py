@@ -72,7 +72,9 @@ def test_bilinear_is_exact_for_a_linear_field_and_hits_nodes():
     x = np.linspace(0.0, 1000.0, 11)
     y = np.linspace(-500.0, 500.0, 6)
     gx, gy = np.meshgrid(x, y)
-    field = GridCurrent(x_m=x, y_m=y, u_mps=0.001 * gx + 0.002 * gy, v_mps=-0.003 * gx + 0.1, interpolation="linear")
+    field = GridCurrent(
+        x_m=x, y_m=y, u_mps=0.001 * gx + 0.002 * gy, v_mps=-0.003 * gx + 0.1, interpolation="linear"
+    )
     rng = np.random.default_rng(2)
     p = np.column_stack([rng.uniform(0, 1000, 50), rng.uniform(-500, 500, 50)])
     u, v = field.velocity_xy(p[:, 0], p[:, 1])
@@ -106,11 +108,24 @@ def test_time_interpolation_is_linear_and_nan_outside_the_span():
 
 def test_grid_validation_errors():
     with pytest.raises(DataError, match="evenly spaced"):
-        GridCurrent(x_m=np.array([0.0, 1.0, 3.0]), y_m=np.array([0.0, 1.0]), u_mps=np.zeros((2, 3)), v_mps=np.zeros((2, 3)))
+        GridCurrent(
+            x_m=np.array([0.0, 1.0, 3.0]),
+            y_m=np.array([0.0, 1.0]),
+            u_mps=np.zeros((2, 3)),
+            v_mps=np.zeros((2, 3)),
+        )
     with pytest.raises(DataError, match="shape"):
-        GridCurrent(x_m=np.array([0.0, 1.0]), y_m=np.array([0.0, 1.0]), u_mps=np.zeros((3, 2)), v_mps=np.zeros((3, 2)))
+        GridCurrent(
+            x_m=np.array([0.0, 1.0]), y_m=np.array([0.0, 1.0]), u_mps=np.zeros((3, 2)), v_mps=np.zeros((3, 2))
+        )
     with pytest.raises(ConfigError, match="interpolation"):
-        GridCurrent(x_m=np.array([0.0, 1.0]), y_m=np.array([0.0, 1.0]), u_mps=np.zeros((2, 2)), v_mps=np.zeros((2, 2)), interpolation="cubic")
+        GridCurrent(
+            x_m=np.array([0.0, 1.0]),
+            y_m=np.array([0.0, 1.0]),
+            u_mps=np.zeros((2, 2)),
+            v_mps=np.zeros((2, 2)),
+            interpolation="cubic",
+        )
 
 
 def test_double_gyre_is_divergence_free_and_matches_its_stream_function():
@@ -151,6 +166,9 @@ def test_analytic_and_bilinear_vortex_agree_to_interpolation_error(x, y):
 
 
 def test_uniform_and_linear_fields():
-    assert UniformCurrent(velocity_mps=(0.1, -0.2)).velocity([[0, 0], [5, 5]]).tolist() == [[0.1, -0.2], [0.1, -0.2]]
+    assert UniformCurrent(velocity_mps=(0.1, -0.2)).velocity([[0, 0], [5, 5]]).tolist() == [
+        [0.1, -0.2],
+        [0.1, -0.2],
+    ]
     lin = LinearCurrent(matrix_per_s=((0.0, -1.0), (1.0, 0.0)), offset_mps=(0.5, 0.0))
     np.testing.assert_allclose(lin.velocity([[1.0, 2.0]]), [[-1.5, 1.0]])

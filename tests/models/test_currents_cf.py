@@ -47,7 +47,9 @@ def test_double_gyre_round_trip_on_a_projected_grid(tmp_path):
 def test_lonlat_product_is_resampled_to_metres(tmp_path):
     x, y, u, v, _ = _gyre_grid(times=(0.0,))
     proj = LocalProjection(lat0_deg=32.7, lon0_deg=-117.2)
-    path = write_current_netcdf(tmp_path / "ll.nc", GridCurrent(x_m=x - 5000, y_m=y - 2500, u_mps=u, v_mps=v), projection=proj)
+    path = write_current_netcdf(
+        tmp_path / "ll.nc", GridCurrent(x_m=x - 5000, y_m=y - 2500, u_mps=u, v_mps=v), projection=proj
+    )
     product = open_current_netcdf(path, origin_lonlat_deg=(-117.2, 32.7))
     f = product.field
     assert product.projection is not None
@@ -94,7 +96,9 @@ def test_wrong_or_missing_units_are_errors(tmp_path):
 
 
 def test_centimetres_per_second_are_converted(tmp_path):
-    _dataset(u_attrs={"units": "cm s-1"}, u=np.full((3, 4), 50.0)).to_netcdf(tmp_path / "d.nc", engine="h5netcdf")
+    _dataset(u_attrs={"units": "cm s-1"}, u=np.full((3, 4), 50.0)).to_netcdf(
+        tmp_path / "d.nc", engine="h5netcdf"
+    )
     assert open_current_netcdf(tmp_path / "d.nc").field.u_mps.max() == pytest.approx(0.5)
 
 

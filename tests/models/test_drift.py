@@ -3,8 +3,21 @@ import pytest
 from scipy.linalg import expm
 
 from oceanloc.errors import ConfigError
-from oceanloc.models.currents import GridCurrent, LinearCurrent, UniformCurrent, thesis_vortex_grid, vortex_velocity_xy
-from oceanloc.models.drift import STOP_BLOCKED, STOP_COMPLETED, STOP_NO_CURRENT, euler_step, integrate, rk4_step
+from oceanloc.models.currents import (
+    GridCurrent,
+    LinearCurrent,
+    UniformCurrent,
+    thesis_vortex_grid,
+    vortex_velocity_xy,
+)
+from oceanloc.models.drift import (
+    STOP_BLOCKED,
+    STOP_COMPLETED,
+    STOP_NO_CURRENT,
+    euler_step,
+    integrate,
+    rk4_step,
+)
 
 A = np.array([[-0.2, -1.0], [1.0, -0.1]]) * 1e-3  # a damped rotation, 1/s
 B = np.array([0.05, -0.02])  # m/s
@@ -19,7 +32,7 @@ def _exact(p0, t):
 def _final_error(method, dt, t_end=6000.0):
     field = LinearCurrent(matrix_per_s=tuple(map(tuple, A)), offset_mps=tuple(B))
     p0 = np.array([[1000.0, -500.0]])
-    track = integrate(field, p0, dt_s=dt, n_steps=int(round(t_end / dt)), method=method)
+    track = integrate(field, p0, dt_s=dt, n_steps=round(t_end / dt), method=method)
     return np.linalg.norm(track.final_m[0] - _exact(p0[0], t_end))
 
 
@@ -34,7 +47,7 @@ def test_rk4_converges_at_fourth_order_on_an_exact_linear_solution():
     e1, e2 = _final_error("rk4", 200.0), _final_error("rk4", 100.0)
     # Global error C dt^4: halving dt divides it by 2^4 = 16 (higher-order terms move the ratio by ~1%).
     assert 14.0 < e1 / e2 < 18.0
-    # Local error ~ (|A| dt)^5 / 5! |x| = 0.1^5 / 120 * 1100 m = 9e-5 m; 60 steps accumulate at most ~5.5e-3 m.
+    # Local error ~ (|A| dt)^5 / 5! |x| = 0.1^5 / 120 * 1100 m = 9e-5 m; 60 steps accumulate ~5.5e-3 m.
     assert e2 < 5.5e-3
 
 
@@ -81,7 +94,14 @@ def test_particles_stop_where_the_current_is_undefined_or_blocked():
     x = np.array([0.0, 100.0, 200.0])
     y = np.array([0.0, 100.0])
     field = GridCurrent(x_m=x, y_m=y, u_mps=np.full((2, 3), 1.0), v_mps=np.zeros((2, 3)))
-    tr = integrate(field, [[50.0, 50.0], [10.0, 50.0]], dt_s=30.0, n_steps=10, method="euler", is_free=lambda px, py: px < 100.0)
+    tr = integrate(
+        field,
+        [[50.0, 50.0], [10.0, 50.0]],
+        dt_s=30.0,
+        n_steps=10,
+        method="euler",
+        is_free=lambda px, py: px < 100.0,
+    )
     assert tr.stop_reason.tolist() == [STOP_BLOCKED, STOP_BLOCKED]
     assert tr.final_m[:, 0].tolist() == [80.0, 70.0]
     assert not tr.alive[0, -1]

@@ -42,7 +42,9 @@ def test_uniform_current_optimum_is_the_cross_stream_distance():
     flown = ours.path.flight_distance_m
     # Two refinement rounds place the landing within a sixteenth of the 300 m lattice.
     assert 1150.0 - 1e-6 <= flown <= 1150.0 + 20.0
-    fine = plan_lattice(problem, np.random.default_rng(0), options=dataclasses.replace(REFERENCE_OPTIONS, spacing_m=100.0))
+    fine = plan_lattice(
+        problem, np.random.default_rng(0), options=dataclasses.replace(REFERENCE_OPTIONS, spacing_m=100.0)
+    )
     assert 1150.0 - 1e-6 <= fine.path.flight_distance_m <= 1152.0
 
 
@@ -50,7 +52,13 @@ def _exhaustive_single_hop(problem, takeoffs, landings):
     """Best 'drift, one flight, drift into the goal disk' by brute force over take-off steps and landings."""
     best = np.inf
     prop, space = problem.propagator, problem.space
-    roll = prop.rollout(space, landings, problem.horizon_steps, goal_m=problem.goal_m, goal_tolerance_m=problem.goal_tolerance_m)
+    roll = prop.rollout(
+        space,
+        landings,
+        problem.horizon_steps,
+        goal_m=problem.goal_m,
+        goal_tolerance_m=problem.goal_tolerance_m,
+    )
     ok = roll.reaches_goal & space.is_valid(landings)
     for s in takeoffs:
         d = np.linalg.norm(landings[ok] - s, axis=1)
@@ -82,7 +90,13 @@ def test_flight_legs_respect_the_longest_hop():
 
 
 def test_no_fly_obstacles_are_flown_around():
-    problem = uniform_problem(velocity=(0.0, 0.0), goal=(3000.0, 0.0), rectangles=[[1000.0, 2000.0, -400.0, 400.0]], no_fly=True, horizon_s=60.0)
+    problem = uniform_problem(
+        velocity=(0.0, 0.0),
+        goal=(3000.0, 0.0),
+        rectangles=[[1000.0, 2000.0, -400.0, 400.0]],
+        no_fly=True,
+        horizon_s=60.0,
+    )
     res = plan_lattice(problem, np.random.default_rng(0))
     assert res.success
     hops = res.path.hops_m()

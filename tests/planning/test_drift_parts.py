@@ -19,7 +19,7 @@ def test_growing_nearest_equals_brute_force(n, k, seed):
         index.add(float(x), float(y))
         if i % 37 == 0 or i == n - 1:
             q = rng.uniform(-100, 100, 2)
-            d, idx = index.query(float(q[0]), float(q[1]), k, exclude=i)
+            d, _idx = index.query(float(q[0]), float(q[1]), k, exclude=i)
             brute = np.linalg.norm(pts[: i + 1] - q, axis=1)
             brute[i] = np.inf
             order = np.argsort(brute, kind="stable")[: min(k, i)]
@@ -90,7 +90,10 @@ def test_path_energy_account():
 
 
 def test_path_from_segments_times():
-    segs = [(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), False), (np.array([[2.0, 0.0], [2.0, 10.0]]), True)]
+    segs = [
+        (np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), False),
+        (np.array([[2.0, 0.0], [2.0, 10.0]]), True),
+    ]
     p = DriftPath.from_segments(segs, t0_s=100.0, dt_s=60.0, flight_speed_mps=5.0)
     np.testing.assert_allclose(p.times_s, [100.0, 160.0, 220.0, 222.0])
     assert p.flight.tolist() == [False, False, True]

@@ -14,7 +14,9 @@ def _check_path(problem, path):
     assert np.allclose(path.points_m[0], problem.start_m)
     drift = np.flatnonzero(~path.flight)
     for i in drift:
-        x, y = problem.propagator.step_xy(float(path.points_m[i, 0]), float(path.points_m[i, 1]), float(path.times_s[i]))
+        x, y = problem.propagator.step_xy(
+            float(path.points_m[i, 0]), float(path.points_m[i, 1]), float(path.times_s[i])
+        )
         np.testing.assert_allclose([x, y], path.points_m[i + 1], atol=1e-9)
     landings = path.points_m[np.flatnonzero(path.flight) + 1]
     assert np.all(problem.space.is_valid(landings) | np.all(np.isclose(landings, problem.goal_m), axis=1))
@@ -24,14 +26,18 @@ def test_single_solution_path_and_tree_are_consistent():
     problem = fixed_field()
     res = plan_thesis(problem, np.random.default_rng(0), options=ThesisOptions(keep_tree=True))
     assert res.status is PlanStatus.EXACT and res.solutions == 1
-    assert np.linalg.norm(res.path.end_m - problem.goal_m) < problem.goal_tolerance_m or np.allclose(res.path.end_m, problem.goal_m)
+    assert np.linalg.norm(res.path.end_m - problem.goal_m) < problem.goal_tolerance_m or np.allclose(
+        res.path.end_m, problem.goal_m
+    )
     _check_path(problem, res.path)
     assert res.flight_energy_wh == pytest.approx(res.path.flight_distance_m * problem.energy.flight_wh_per_m)
     assert res.flight_energy_wh < res.direct_flight_wh
     tree = res.tree
     child = np.arange(1, tree.parent.size)
     # Cumulative costs stay consistent through rewiring: cost = parent's cost + branch cost.
-    np.testing.assert_allclose(tree.cost[child], tree.cost[tree.parent[child]] + tree.branch_cost[child], atol=1e-9)
+    np.testing.assert_allclose(
+        tree.cost[child], tree.cost[tree.parent[child]] + tree.branch_cost[child], atol=1e-9
+    )
     # No loops: every node reaches the root.
     depth = np.zeros(tree.parent.size, dtype=int)
     node = np.arange(tree.parent.size)
@@ -46,7 +52,12 @@ def test_optimality_seeking_is_never_worse_than_its_first_solution():
     problem = fixed_field()
     for seed in (1, 2):
         single = plan_thesis(problem, np.random.default_rng(seed))
-        best = plan_thesis(problem, np.random.default_rng(seed), PlanBudget(max_iterations=4000), ThesisOptions(mode="optimality-seeking"))
+        best = plan_thesis(
+            problem,
+            np.random.default_rng(seed),
+            PlanBudget(max_iterations=4000),
+            ThesisOptions(mode="optimality-seeking"),
+        )
         assert best.success and best.solutions >= 1
         assert best.flight_energy_wh <= single.flight_energy_wh + 1e-9
         assert best.iterations == 4000

@@ -11,8 +11,12 @@ def test_figures_are_written(tmp_path):
     outs = [
         tree_figure(tmp_path / "tree.png", problem, res.tree, res.path, "tree"),
         paths_figure(tmp_path / "paths.png", problem, {"thesis-single": res.path}, "paths"),
-        energy_figure(tmp_path / "energy.png", {"thesis-single": np.array([30.0, 28.0])}, 49.5, 22.1, "energy"),
-        following_figure(tmp_path / "f.png", problem, res.path, [res.path.points_m], [res.path.hops_m()], 150.0, "f"),
+        energy_figure(
+            tmp_path / "energy.png", {"thesis-single": np.array([30.0, 28.0])}, 49.5, 22.1, "energy"
+        ),
+        following_figure(
+            tmp_path / "f.png", problem, res.path, [res.path.points_m], [res.path.hops_m()], 150.0, "f"
+        ),
     ]
     for out in outs:
         assert out.exists() and out.stat().st_size > 10_000

@@ -35,12 +35,20 @@ def test_random_fields_follow_the_thesis_generator():
 
 
 def test_small_reproduction_json_has_the_issue_shape():
-    report = reproduce_dillard_drrt(runs=3, seed=1, fields=1, field_runs=1, iterations=2000, reference_spacing_m=200.0)
+    report = reproduce_dillard_drrt(
+        runs=3, seed=1, fields=1, field_runs=1, iterations=2000, reference_spacing_m=200.0
+    )
     payload = report.as_json()
     assert set(payload) == {"direct_flight_wh", "planners", "best_achievable_wh"}
     assert set(payload["planners"]) == {"thesis-single", "thesis-optimality-seeking", "oceanloc"}
     for stats in payload["planners"].values():
-        assert set(stats) == {"success_rate", "energy_wh_mean", "energy_wh_std", "saving_mean", "compute_s_median"}
+        assert set(stats) == {
+            "success_rate",
+            "energy_wh_mean",
+            "energy_wh_std",
+            "saving_mean",
+            "compute_s_median",
+        }
         assert 0.0 <= stats["success_rate"] <= 1.0
     ours = report.planners["oceanloc"]
     assert ours.success_rate == 1.0 and ours.saving_mean > 0.5

@@ -7,7 +7,13 @@ from oceanloc._random import run_generators
 from oceanloc.config.drift import FollowingSettings
 from oceanloc.planning.drift_rrt.planner import make_planner
 from oceanloc.sim.drifters import swap_positions
-from oceanloc.sim.path_following import FollowingTask, follow_plans, gauss_markov_noise, merge_following, summarize_following
+from oceanloc.sim.path_following import (
+    FollowingTask,
+    follow_plans,
+    gauss_markov_noise,
+    merge_following,
+    summarize_following,
+)
 from tests.planning.drift_fixtures import fixed_field, uniform_problem
 
 EXACT = FollowingSettings(current_scale=1.0, current_rotation_rad=0.0, noise_mps=0.0, watch_circle_m=1.0)
@@ -16,7 +22,9 @@ EXACT = FollowingSettings(current_scale=1.0, current_rotation_rad=0.0, noise_mps
 def test_following_in_the_planning_current_reproduces_the_plan():
     problem = fixed_field()
     plan = make_planner("oceanloc")(problem, np.random.default_rng(0))
-    res = follow_plans(problem, plan.path, EXACT, run_generators(0, [0, 1]), make_planner("oceanloc"), keep_tracks=1)
+    res = follow_plans(
+        problem, plan.path, EXACT, run_generators(0, [0, 1]), make_planner("oceanloc"), keep_tracks=1
+    )
     assert res.arrived.all() and res.replans.tolist() == [0, 0]
     np.testing.assert_allclose(res.flight_energy_wh, plan.flight_energy_wh, rtol=1e-9)
     assert res.duration_s[0] == pytest.approx(plan.path.duration_s, abs=60.0)
@@ -56,7 +64,9 @@ def test_blocked_drift_triggers_a_replan():
     # Planned without the wall, the plan is a pure drift east into the goal; the wall stops the drift and
     # the follower must replan (a hop over it).
     open_water = uniform_problem(velocity=(0.5, 0.0), goal=(3000.0, 0.0))
-    walled = uniform_problem(velocity=(0.5, 0.0), goal=(3000.0, 0.0), rectangles=[[600.0, 700.0, -300.0, 300.0]])
+    walled = uniform_problem(
+        velocity=(0.5, 0.0), goal=(3000.0, 0.0), rectangles=[[600.0, 700.0, -300.0, 300.0]]
+    )
     planner = make_planner("oceanloc")
     plan = planner(open_water, np.random.default_rng(0))
     assert plan.path.hops_m().shape[0] == 0

@@ -5,6 +5,8 @@ One import per module; keep them sorted so that merges stay trivial.
 
 from __future__ import annotations
 
-from oceanloc.cli import drift_plan  # noqa: F401
-from oceanloc.cli import reproduce_dillard_drrt  # noqa: F401
-from oceanloc.cli import simulate_drift  # noqa: F401
+from oceanloc.cli import (
+    drift_plan,  # noqa: F401
+    reproduce_dillard_drrt,  # noqa: F401
+    simulate_drift,  # noqa: F401
+)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import typer
 from rich.table import Table
@@ -11,10 +12,10 @@ from oceanloc._random import run_generators
 from oceanloc.cli import reproduce
 from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.evaluation.montecarlo import open_executor
-from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
-from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
 from oceanloc.planning.drift_rrt.problem import PlanBudget
+from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 from oceanloc.report.drift_figures import energy_figure, paths_figure, tree_figure
 from oceanloc.reproduce.dillard_drrt import (
     THESIS_DIRECT_FLIGHT_WH,
@@ -30,13 +31,23 @@ from oceanloc.reproduce.dillard_drrt import (
 def dillard_drrt(
     runs: int = typer.Option(1000, "--runs", min=1, help="Monte Carlo runs per planner on the fixed field."),
     seed: int = typer.Option(2014, "--seed", min=0, help="Master seed."),
-    json_path: Path | None = typer.Option(None, "--json", help="Write the summary as JSON."),
-    figures: Path | None = typer.Option(None, "--figures", help="Write PNG figures to this folder."),
-    fields: int = typer.Option(20, "--fields", min=0, help="Random obstacle fields (the thesis' generator); 0 skips."),
+    json_path: Annotated[Path | None, typer.Option("--json", help="Write the summary as JSON.")] = None,
+    figures: Annotated[
+        Path | None, typer.Option("--figures", help="Write PNG figures to this folder.")
+    ] = None,
+    fields: int = typer.Option(
+        20, "--fields", min=0, help="Random obstacle fields (the thesis' generator); 0 skips."
+    ),
     field_runs: int = typer.Option(10, "--field-runs", min=1, help="Runs per planner and random field."),
-    iterations: int = typer.Option(25_000, "--iterations", min=1, help="Iterations of the optimality-seeking mode."),
-    reference_spacing: float = typer.Option(50.0, "--reference-spacing", min=10.0, help="Lattice spacing (m) of the best-achievable reference."),
-    workers: int | None = typer.Option(None, "--workers", min=1, help="Local worker processes (default: all cores)."),
+    iterations: int = typer.Option(
+        25_000, "--iterations", min=1, help="Iterations of the optimality-seeking mode."
+    ),
+    reference_spacing: float = typer.Option(
+        50.0, "--reference-spacing", min=10.0, help="Lattice spacing (m) of the best-achievable reference."
+    ),
+    workers: int | None = typer.Option(
+        None, "--workers", min=1, help="Local worker processes (default: all cores)."
+    ),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address or local:N."),
 ) -> None:
     """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner."""
@@ -67,7 +78,17 @@ def dillard_drrt(
 
 def _print_report(report: DillardReport, runs: int, iterations: int) -> None:
     table = Table(title=f"DR-RRT* Monte Carlo on the fixed field ({runs} runs per planner) - thesis Table 4")
-    for col in ("planner", "success", "energy Wh", "saving", "compute ms (median)", "/ best", "thesis energy Wh", "thesis saving", "thesis compute ms"):
+    for col in (
+        "planner",
+        "success",
+        "energy Wh",
+        "saving",
+        "compute ms (median)",
+        "/ best",
+        "thesis energy Wh",
+        "thesis saving",
+        "thesis compute ms",
+    ):
         table.add_column(col, justify="right" if col != "planner" else "left")
     for name in PLANNER_NAMES:
         s = report.planners[name]
@@ -91,10 +112,20 @@ def _print_report(report: DillardReport, runs: int, iterations: int) -> None:
         f"(saving {100 * (1 - report.best_achievable_wh / report.direct_flight_wh):.1f}%)"
     )
     console.print(f"units: {report.convention}")
-    console.print(f"{reference_options_note(report.reference_options)}; thesis compute times: MATLAB, Core i7-2600 (mean +- std)")
+    console.print(
+        f"{reference_options_note(report.reference_options)}; "
+        "thesis compute times: MATLAB, Core i7-2600 (mean +- std)"
+    )
     if report.fields:
         ft = Table(title=f"Across {report.field_best_wh.size} random fields (the thesis' generator)")
-        for col in ("planner", "success", "mean saving", "worst field saving", "/ best (mean over fields)", "compute ms (median)"):
+        for col in (
+            "planner",
+            "success",
+            "mean saving",
+            "worst field saving",
+            "/ best (mean over fields)",
+            "compute ms (median)",
+        ):
             ft.add_column(col, justify="right" if col != "planner" else "left")
         for name, s in report.fields.items():
             ft.add_row(
@@ -113,15 +144,52 @@ def _figures(folder: Path, report: DillardReport, seed: int, iterations: int) ->
     rng = run_generators(seed, [0])[0]
     single = plan_thesis(problem, rng, options=ThesisOptions(mode="single", keep_tree=True))
     rng = run_generators(seed, [0])[0]
-    optimal = plan_thesis(problem, rng, PlanBudget(max_iterations=iterations), ThesisOptions(mode="optimality-seeking", keep_tree=True))
+    optimal = plan_thesis(
+        problem,
+        rng,
+        PlanBudget(max_iterations=iterations),
+        ThesisOptions(mode="optimality-seeking", keep_tree=True),
+    )
     ours = plan_oceanloc(problem, run_generators(seed, [0])[0])
     written = [
-        tree_figure(folder / "drrt_tree_single.png", problem, single.tree, single.path, "DR-RRT* single solution (thesis Figs. 46, 50)"),  # type: ignore[arg-type]
-        tree_figure(folder / "drrt_tree_optimality.png", problem, optimal.tree, optimal.path, f"DR-RRT* optimality-seeking, {iterations} iterations"),  # type: ignore[arg-type]
+        tree_figure(
+            folder / "drrt_tree_single.png",
+            problem,
+            single.tree,
+            single.path,
+            "DR-RRT* single solution (thesis Figs. 46, 50)",
+        ),  # type: ignore[arg-type]
+        tree_figure(
+            folder / "drrt_tree_optimality.png",
+            problem,
+            optimal.tree,
+            optimal.path,
+            f"DR-RRT* optimality-seeking, {iterations} iterations",
+        ),  # type: ignore[arg-type]
     ]
-    plans = {"thesis-single": single.path, "thesis-optimality-seeking": optimal.path, "oceanloc": ours.path, "best achievable": report.reference.path}
-    written.append(paths_figure(folder / "drrt_paths.png", problem, {k: v for k, v in plans.items() if v is not None}, "Final paths"))
+    plans = {
+        "thesis-single": single.path,
+        "thesis-optimality-seeking": optimal.path,
+        "oceanloc": ours.path,
+        "best achievable": report.reference.path,
+    }
+    written.append(
+        paths_figure(
+            folder / "drrt_paths.png",
+            problem,
+            {k: v for k, v in plans.items() if v is not None},
+            "Final paths",
+        )
+    )
     energies = {name: report.runs[name].energy_wh for name in PLANNER_NAMES}
-    written.append(energy_figure(folder / "drrt_energy.png", energies, report.direct_flight_wh, report.best_achievable_wh, "Flight energy per run (thesis Figs. 51, 53)"))
+    written.append(
+        energy_figure(
+            folder / "drrt_energy.png",
+            energies,
+            report.direct_flight_wh,
+            report.best_achievable_wh,
+            "Flight energy per run (thesis Figs. 51, 53)",
+        )
+    )
     for p in written:
         err_console.print(f"wrote {p}")

@@ -12,7 +12,8 @@ and the path-following trial::
     kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | netcdf
     interpolation = "cell"         # thesis-vortex: cell (the thesis' lookup) | linear
     # vortex: scale_m; double-gyre: length_m, amplitude_mps, epsilon, period_h, origin_m;
-    # uniform: velocity_mps = [u, v]; netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
+    # uniform: velocity_mps = [u, v];
+    # netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
 
     [drift]
     integrator = "euler"           # euler (the thesis) | rk4
@@ -39,7 +40,7 @@ and the path-following trial::
     flight_speed_kn = 20.0
     max_flight_time_s = 120.0
     nautical_mile_m = 1852.0       # 2000 only to reproduce the thesis' energies
-    flight_legs = "hop"            # hop: flights are legs of at most one hop; any: any length (thesis accounting)
+    flight_legs = "hop"            # hop: legs of at most one hop; any: any length (thesis accounting)
 
     [hdop]                         # flock geometry of the HDOP cost term (bearing-only, as the thesis)
     others_m = [[5000.0, 5000.0], [5000.0, -5000.0], [-5000.0, -5000.0]]
@@ -82,9 +83,8 @@ from oceanloc.models.currents import (
     thesis_vortex_grid,
 )
 from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
-from oceanloc.models.drift import METHODS
+from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
-from oceanloc.models.drift import Method
 from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.units import DEG
 
@@ -197,7 +197,11 @@ class DriftScenario:
 def builtin_drift_scenarios() -> list[str]:
     """Names of the drift scenarios shipped with oceanloc."""
     files = resources.files(_SCENARIO_PACKAGE).iterdir()
-    return sorted(f.name.removesuffix(".toml") for f in files if f.name.startswith(DRIFT_PREFIX) and f.name.endswith(".toml"))
+    return sorted(
+        f.name.removesuffix(".toml")
+        for f in files
+        if f.name.startswith(DRIFT_PREFIX) and f.name.endswith(".toml")
+    )
 
 
 def load_drift_scenario(name_or_path: str | Path) -> DriftScenario:
@@ -223,12 +227,18 @@ def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection |
         interp = t.str("interpolation", "cell", choices=("cell", "linear"))
         scale = t.float("scale_m", 10_000.0, lo=1.0, lo_open=False)
         f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
-        desc = f"thesis vortex sampled every {0.05 * scale:g} m ({'piecewise constant per cell' if interp == 'cell' else 'bilinear'})"
+        how = "piecewise constant per cell" if interp == "cell" else "bilinear"
+        desc = f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
         return f, None, desc, land
     if kind == "vortex":
         scale = t.float("scale_m", 10_000.0, lo=1.0)
         half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True)
-        return VortexCurrent(scale_m=scale, half_width_m=half), None, f"analytic thesis vortex (scale {scale:g} m)", land
+        return (
+            VortexCurrent(scale_m=scale, half_width_m=half),
+            None,
+            f"analytic thesis vortex (scale {scale:g} m)",
+            land,
+        )
     if kind == "double-gyre":
         length = t.float("length_m", 5000.0, lo=0.0, lo_open=True)
         amp = t.float("amplitude_mps", 0.5, lo=0.0)
@@ -245,7 +255,12 @@ def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection |
         return f, None, f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}", land
     if kind == "uniform":
         vel = t.vector("velocity_mps", 2)
-        return UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))), None, f"uniform {vel.tolist()} m/s", land
+        return (
+            UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
+            None,
+            f"uniform {vel.tolist()} m/s",
+            land,
+        )
     rel = t.str("path")
     path = Path(rel) if Path(rel).is_absolute() else base_dir / rel
     u = t.str("u", "") or None
@@ -289,7 +304,9 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     else:
         bounds = np.asarray(default_bounds, dtype=float)
     if not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
-        raise map_t.error("bounds_m", f"must be [x_min, x_max, y_min, y_max] with min < max, got {bounds.tolist()}")
+        raise map_t.error(
+            "bounds_m", f"must be [x_min, x_max, y_min, y_max] with min < max, got {bounds.tolist()}"
+        )
     inflation = map_t.float("inflation_m", 0.0, lo=0.0)
     no_fly = map_t.bool("flights_avoid_obstacles", False)
     rects = []
@@ -297,12 +314,15 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         xr = rt.vector("x_m", 2)
         yr = rt.vector("y_m", 2)
         if not (xr[0] < xr[1] and yr[0] < yr[1]):
-            raise rt.error("x_m", f"rectangle needs x_m = [x0, x1] and y_m = [y0, y1] increasing, got {xr.tolist()}, {yr.tolist()}")
+            raise rt.error(
+                "x_m",
+                f"needs increasing x_m = [x0, x1] and y_m = [y0, y1], got {xr.tolist()}, {yr.tolist()}",
+            )
         rects.append([xr[0], xr[1], yr[0], yr[1]])
         rt.check_unknown()
     polys = []
     for pt in map_t.tables("polygons"):
-        raw = pt._get("vertices_m", None)  # noqa: SLF001 - nested list, validated here
+        raw = pt._get("vertices_m", None)
         try:
             verts = np.asarray(raw, dtype=float)
         except (TypeError, ValueError):
@@ -343,7 +363,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     hdop_t = root.table("hdop", required=False)
     others = target = None
     if hdop_t.has("others_m"):
-        raw = hdop_t._get("others_m", None)  # noqa: SLF001
+        raw = hdop_t._get("others_m", None)
         try:
             others = np.asarray(raw, dtype=float).reshape(-1, 2)
         except (TypeError, ValueError):

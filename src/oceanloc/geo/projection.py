@@ -40,7 +40,9 @@ class LocalProjection:
     def to_local(self, lon_deg: ArrayLike, lat_deg: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Longitude/latitude (degrees, any broadcastable shape) to east/north metres."""
         lon = _wrap_near(np.asarray(lon_deg, dtype=float), self.lon0_deg)
-        e, n, _ = pymap3d.geodetic2enu(np.asarray(lat_deg, dtype=float), lon, 0.0, self.lat0_deg, self.lon0_deg, 0.0)
+        e, n, _ = pymap3d.geodetic2enu(
+            np.asarray(lat_deg, dtype=float), lon, 0.0, self.lat0_deg, self.lon0_deg, 0.0
+        )
         return np.asarray(e, dtype=float), np.asarray(n, dtype=float)
 
     def to_lonlat(self, x_m: ArrayLike, y_m: ArrayLike) -> tuple[FloatArray, FloatArray]:

@@ -1,10 +1,10 @@
 """Writers for drift/flight plans: CSV (every vertex) and GeoJSON (RFC 7946, longitude/latitude).
 
-CSV columns: ``t_s, x_m, y_m, mode`` (``drift`` or ``flight`` for the edge that *ends* at the vertex; ``start``
-for the first) and, when the plan is georeferenced, ``lon_deg, lat_deg``. GeoJSON needs WGS84 coordinates, so
-it is written only with a :class:`~oceanloc.geo.projection.LocalProjection` (from a longitude/latitude current
-product, or an origin the user gives): a FeatureCollection with one LineString per drift leg and per flight
-(``properties.mode``) and one Point per take-off and landing.
+CSV columns: ``t_s, x_m, y_m, mode`` (``drift`` or ``flight`` for the edge that *ends* at the vertex,
+``start`` for the first) and, when the plan is georeferenced, ``lon_deg, lat_deg``. GeoJSON needs WGS84
+coordinates, so it is written only with a :class:`~oceanloc.geo.projection.LocalProjection` (from a
+longitude/latitude current product, or an origin the user gives): a FeatureCollection with one LineString
+per drift leg and per flight (``properties.mode``) and one Point per take-off and landing.
 """
 
 from __future__ import annotations
@@ -36,7 +36,12 @@ def write_path_csv(path: str | Path, plan: DriftPath, projection: LocalProjectio
             w = csv.writer(fh)
             w.writerow(header)
             for i in range(plan.n_points):
-                row: list[Any] = [f"{plan.times_s[i]:.1f}", f"{plan.points_m[i, 0]:.2f}", f"{plan.points_m[i, 1]:.2f}", modes[i]]
+                row: list[Any] = [
+                    f"{plan.times_s[i]:.1f}",
+                    f"{plan.points_m[i, 0]:.2f}",
+                    f"{plan.points_m[i, 1]:.2f}",
+                    modes[i],
+                ]
                 if lonlat is not None:
                     row += [f"{lonlat[0][i]:.7f}", f"{lonlat[1][i]:.7f}"]
                 w.writerow(row)
@@ -45,7 +50,9 @@ def write_path_csv(path: str | Path, plan: DriftPath, projection: LocalProjectio
     return p
 
 
-def path_geojson(plan: DriftPath, projection: LocalProjection, properties: dict[str, Any] | None = None) -> dict[str, Any]:
+def path_geojson(
+    plan: DriftPath, projection: LocalProjection, properties: dict[str, Any] | None = None
+) -> dict[str, Any]:
     """The plan as a GeoJSON FeatureCollection (longitude, latitude)."""
     lon, lat = projection.to_lonlat(plan.points_m[:, 0], plan.points_m[:, 1])
     coords = np.column_stack([lon, lat])
@@ -60,7 +67,11 @@ def path_geojson(plan: DriftPath, projection: LocalProjection, properties: dict[
                 {
                     "type": "Feature",
                     "geometry": {"type": "LineString", "coordinates": coords[a : b + 1].round(7).tolist()},
-                    "properties": {"mode": mode, "t_start_s": float(plan.times_s[a]), "t_end_s": float(plan.times_s[b])},
+                    "properties": {
+                        "mode": mode,
+                        "t_start_s": float(plan.times_s[a]),
+                        "t_end_s": float(plan.times_s[b]),
+                    },
                 }
             )
     for k, hop in enumerate(plan.hops_m()):
@@ -69,7 +80,10 @@ def path_geojson(plan: DriftPath, projection: LocalProjection, properties: dict[
             features.append(
                 {
                     "type": "Feature",
-                    "geometry": {"type": "Point", "coordinates": [round(float(plon), 7), round(float(plat), 7)]},
+                    "geometry": {
+                        "type": "Point",
+                        "coordinates": [round(float(plon), 7), round(float(plat), 7)],
+                    },
                     "properties": {"role": role, "hop": k},
                 }
             )
@@ -83,7 +97,9 @@ def write_path_geojson(
     p = Path(path)
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(json.dumps(path_geojson(plan, projection, properties), indent=1) + "\n", encoding="utf-8")
+        p.write_text(
+            json.dumps(path_geojson(plan, projection, properties), indent=1) + "\n", encoding="utf-8"
+        )
     except OSError as exc:
         raise ConfigError(f"{p}: cannot write GeoJSON ({exc})") from None
     return p

@@ -382,7 +382,9 @@ class GridCurrent(_FieldBase):
             v[~ok] = np.nan
         return u, v
 
-    def _linear_steady(self, fx: FloatArray, fy: FloatArray, nx: int, ny: int) -> tuple[FloatArray, FloatArray]:
+    def _linear_steady(
+        self, fx: FloatArray, fy: FloatArray, nx: int, ny: int
+    ) -> tuple[FloatArray, FloatArray]:
         """Fast path of steady bilinear interpolation on 1-D arrays (planners' rollouts)."""
         ok = (fx >= 0.0) & (fx <= nx - 1) & (fy >= 0.0) & (fy <= ny - 1)
         fxc = np.where(ok, fx, 0.0)
@@ -469,7 +471,7 @@ def thesis_vortex_grid(
     reproduces the thesis' lookup (the value of the lower-left node of the cell, constant over the
     500 m cell); ``"linear"`` interpolates the same samples bilinearly (a continuous field).
     """
-    n = int(round(1.0 / spacing)) + 1
+    n = round(1.0 / spacing) + 1
     axis = np.linspace(-0.5, 0.5, n)
     gx, gy = np.meshgrid(axis, axis)
     u, v = vortex_velocity_xy(gx * scale_m, gy * scale_m, scale_m)

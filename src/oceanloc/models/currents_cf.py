@@ -45,8 +45,22 @@ NORTHWARD_NAMES = tuple(n.replace("eastward", "northward") for n in EASTWARD_NAM
 EASTWARD_VARS = ("uo", "water_u", "u", "U", "ugos", "u_surf")
 NORTHWARD_VARS = ("vo", "water_v", "v", "V", "vgos", "v_surf")
 
-_MPS_UNITS = {"m s-1", "m/s", "m s**-1", "m s^-1", "meter second-1", "meters second-1", "meter/second",
-              "meters/second", "m.s-1", "m sec-1", "meter s-1", "metre s-1", "metres/second", "ms-1"}
+_MPS_UNITS = {
+    "m s-1",
+    "m/s",
+    "m s**-1",
+    "m s^-1",
+    "meter second-1",
+    "meters second-1",
+    "meter/second",
+    "meters/second",
+    "m.s-1",
+    "m sec-1",
+    "meter s-1",
+    "metre s-1",
+    "metres/second",
+    "ms-1",
+}
 _CMPS_UNITS = {"cm s-1", "cm/s", "cm s**-1", "cm s^-1", "centimeter second-1", "centimeters/second", "cm.s-1"}
 _M_UNITS = {"m", "meter", "meters", "metre", "metres"}
 _KM_UNITS = {"km", "kilometer", "kilometers", "kilometre", "kilometres"}
@@ -74,11 +88,13 @@ class CurrentProduct:
     description: str
 
 
-def _import_xarray():  # noqa: ANN202
+def _import_xarray():
     try:
         import xarray as xr
     except ImportError:  # pragma: no cover - declared dependency
-        raise DataError("reading NetCDF currents needs xarray and h5netcdf (pip install xarray h5netcdf)") from None
+        raise DataError(
+            "reading NetCDF currents needs xarray and h5netcdf (pip install xarray h5netcdf)"
+        ) from None
     return xr
 
 
@@ -117,7 +133,7 @@ def open_current_netcdf(
         raise DataError(f"{p}: current file not found")
     try:
         ds = xr.open_dataset(p, engine="h5netcdf")
-    except Exception as exc:  # noqa: BLE001 - any reader failure is a data error for the user
+    except Exception as exc:
         raise DataError(f"{p}: cannot read as NetCDF ({type(exc).__name__}: {exc})") from None
     with ds:
         u_da = _find_velocity(ds, p, u_var, EASTWARD_NAMES, EASTWARD_VARS, "eastward")
@@ -130,7 +146,11 @@ def open_current_netcdf(
         notes: list[str] = []
         if dims["z"] is not None:
             zname = dims["z"]
-            zvals = np.asarray(ds[zname].values, dtype=float) if zname in ds.variables else np.arange(ds.sizes[zname])
+            zvals = (
+                np.asarray(ds[zname].values, dtype=float)
+                if zname in ds.variables
+                else np.arange(ds.sizes[zname])
+            )
             k = int(np.argmin(np.abs(zvals))) if depth_index is None else depth_index
             if not 0 <= k < ds.sizes[zname]:
                 raise DataError(f"{p}: depth index {k} outside 0..{ds.sizes[zname] - 1} of '{zname}'")
@@ -165,8 +185,10 @@ def open_current_netcdf(
         raise DataError(f"{p}: {exc}") from None
     if regridded is not None:
         x_m, y_m, u, v, projection = regridded
-        notes.append(f"lon/lat grid resampled to {x_m[1] - x_m[0]:.0f} m about "
-                     f"({projection.lon0_deg:.4f}, {projection.lat0_deg:.4f})")
+        notes.append(
+            f"lon/lat grid resampled to {x_m[1] - x_m[0]:.0f} m about "
+            f"({projection.lon0_deg:.4f}, {projection.lat0_deg:.4f})"
+        )
     else:
         xs = _length_scale(x_units, p, dims["x"])
         ys = _length_scale(y_units, p, dims["y"])
@@ -187,10 +209,15 @@ def open_current_netcdf(
     return CurrentProduct(field=field, projection=projection, time_origin=t_origin, description=desc)
 
 
-def _find_velocity(ds, path: Path, name: str | None, standard: tuple[str, ...], usual: tuple[str, ...], which: str):  # noqa: ANN001, ANN202
+def _find_velocity(
+    ds, path: Path, name: str | None, standard: tuple[str, ...], usual: tuple[str, ...], which: str
+):
     if name is not None:
         if name not in ds.data_vars:
-            raise DataError(f"{path}: no variable '{name}' ({which} velocity); variables: {', '.join(map(str, ds.data_vars))}")
+            raise DataError(
+                f"{path}: no variable '{name}' ({which} velocity); "
+                f"variables: {', '.join(map(str, ds.data_vars))}"
+            )
         return ds[name]
     for var in ds.data_vars.values():
         if str(var.attrs.get("standard_name", "")) in standard:
@@ -204,15 +231,19 @@ def _find_velocity(ds, path: Path, name: str | None, standard: tuple[str, ...], 
     )
 
 
-def _velocity_scale(path: Path, da) -> float:  # noqa: ANN001
+def _velocity_scale(path: Path, da) -> float:
     units = str(da.attrs.get("units", "")).strip()
     if not units:
-        raise DataError(f"{path}: variable '{da.name}' has no units attribute; expected a velocity such as 'm s-1'")
+        raise DataError(
+            f"{path}: variable '{da.name}' has no units attribute; expected a velocity such as 'm s-1'"
+        )
     if units in _MPS_UNITS:
         return 1.0
     if units in _CMPS_UNITS:
         return 0.01
-    raise DataError(f"{path}: variable '{da.name}' has units '{units}', not a velocity (expected 'm s-1' or 'cm s-1')")
+    raise DataError(
+        f"{path}: variable '{da.name}' has units '{units}', not a velocity (expected 'm s-1' or 'cm s-1')"
+    )
 
 
 def _length_scale(units: str, path: Path, name: str) -> float:
@@ -223,7 +254,7 @@ def _length_scale(units: str, path: Path, name: str) -> float:
     raise DataError(f"{path}: coordinate '{name}' has units '{units}'; expected metres or kilometres")
 
 
-def _classify_dims(ds, path: Path, da) -> dict:  # noqa: ANN001
+def _classify_dims(ds, path: Path, da) -> dict:
     out: dict = {"x": None, "y": None, "t": None, "z": None, "kind": None}
     for dim in da.dims:
         coord = ds[dim] if dim in ds.variables else None
@@ -232,9 +263,17 @@ def _classify_dims(ds, path: Path, da) -> dict:  # noqa: ANN001
         units = str(attrs.get("units", "")).lower()
         axis = str(attrs.get("axis", "")).upper()
         lname = str(dim).lower()
-        if sname == "longitude" or units in ("degrees_east", "degree_east", "degrees_e") or lname in ("lon", "longitude", "nav_lon"):
+        if (
+            sname == "longitude"
+            or units in ("degrees_east", "degree_east", "degrees_e")
+            or lname in ("lon", "longitude", "nav_lon")
+        ):
             out["x"], out["kind"] = dim, "lonlat"
-        elif sname == "latitude" or units in ("degrees_north", "degree_north", "degrees_n") or lname in ("lat", "latitude", "nav_lat"):
+        elif (
+            sname == "latitude"
+            or units in ("degrees_north", "degree_north", "degrees_n")
+            or lname in ("lat", "latitude", "nav_lat")
+        ):
             out["y"] = dim
         elif sname == "projection_x_coordinate" or (axis == "X") or lname == "x":
             out["x"], out["kind"] = dim, out["kind"] or "xy"
@@ -242,26 +281,44 @@ def _classify_dims(ds, path: Path, da) -> dict:  # noqa: ANN001
             out["y"] = dim
         elif sname == "time" or axis == "T" or lname in ("time", "t"):
             out["t"] = dim
-        elif sname in ("depth", "altitude", "height") or axis == "Z" or lname in ("depth", "z", "level", "lev", "deptht", "s_rho"):
+        elif (
+            sname in ("depth", "altitude", "height")
+            or axis == "Z"
+            or lname in ("depth", "z", "level", "lev", "deptht", "s_rho")
+        ):
             out["z"] = dim
         else:
-            raise DataError(f"{path}: cannot tell what dimension '{dim}' of '{da.name}' is (not lon/lat/x/y/time/depth)")
+            raise DataError(
+                f"{path}: cannot tell what dimension '{dim}' of '{da.name}' is (not lon/lat/x/y/time/depth)"
+            )
     if out["x"] is None or out["y"] is None:
         raise DataError(f"{path}: '{da.name}' needs longitude/latitude or x/y dimensions, has {da.dims}")
     return out
 
 
-def _time_seconds(ds, path: Path, name: str) -> tuple[FloatArray, str]:  # noqa: ANN001
+def _time_seconds(ds, path: Path, name: str) -> tuple[FloatArray, str]:
     values = ds[name].values
     if np.issubdtype(values.dtype, np.datetime64):
         t = (values - values[0]) / np.timedelta64(1, "s")
         origin = np.datetime_as_string(values[0], unit="s")
     elif np.issubdtype(values.dtype, np.number):
         units = str(ds[name].attrs.get("units", "")).lower()
-        per = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0, "h": 3600.0, "hour": 3600.0, "hours": 3600.0,
-               "d": 86400.0, "day": 86400.0, "days": 86400.0}.get(units.split(" since ")[0].strip())
+        per = {
+            "s": 1.0,
+            "sec": 1.0,
+            "second": 1.0,
+            "seconds": 1.0,
+            "h": 3600.0,
+            "hour": 3600.0,
+            "hours": 3600.0,
+            "d": 86400.0,
+            "day": 86400.0,
+            "days": 86400.0,
+        }.get(units.split(" since ")[0].strip())
         if per is None:
-            raise DataError(f"{path}: time '{name}' has units '{units}'; expected seconds, hours or days (since ...)")
+            raise DataError(
+                f"{path}: time '{name}' has units '{units}'; expected seconds, hours or days (since ...)"
+            )
         t = (np.asarray(values, dtype=float) - float(values[0])) * per
         origin = f"{values[0]} {units}"
     else:
@@ -272,7 +329,9 @@ def _time_seconds(ds, path: Path, name: str) -> tuple[FloatArray, str]:  # noqa:
     return t, str(origin)
 
 
-def _sample_rectilinear(xc: FloatArray, yc: FloatArray, values: FloatArray, xq: FloatArray, yq: FloatArray) -> FloatArray:
+def _sample_rectilinear(
+    xc: FloatArray, yc: FloatArray, values: FloatArray, xq: FloatArray, yq: FloatArray
+) -> FloatArray:
     """Bilinear sampling of ``values (nt, ny, nx)`` on increasing rectilinear axes at points ``(xq, yq)``.
 
     ``NaN`` where a surrounding node is ``NaN`` or the point lies outside the axes.
@@ -289,7 +348,7 @@ def _sample_rectilinear(xc: FloatArray, yc: FloatArray, values: FloatArray, xq: 
     return out
 
 
-def _increasing(axis: FloatArray, u: FloatArray, v: FloatArray, dim: int, name: str):  # noqa: ANN202
+def _increasing(axis: FloatArray, u: FloatArray, v: FloatArray, dim: int, name: str):
     """Make ``axis`` increasing, flipping ``u`` and ``v`` along ``dim`` with it."""
     if axis.size < 2:
         raise DataError(f"the grid needs at least two nodes along {name}")
@@ -301,7 +360,7 @@ def _increasing(axis: FloatArray, u: FloatArray, v: FloatArray, dim: int, name: 
     return axis, u, v
 
 
-def _regrid_xy(xc: FloatArray, yc: FloatArray, u: FloatArray, v: FloatArray):  # noqa: ANN202
+def _regrid_xy(xc: FloatArray, yc: FloatArray, u: FloatArray, v: FloatArray):
     xc, u, v = _increasing(xc, u, v, 2, "x")
     yc, u, v = _increasing(yc, u, v, 1, "y")
     dx = float(np.min(np.diff(xc)))
@@ -316,7 +375,9 @@ def _regrid_xy(xc: FloatArray, yc: FloatArray, u: FloatArray, v: FloatArray):  #
     return xs, ys, su, sv
 
 
-def _regrid_lonlat(lon: FloatArray, lat: FloatArray, u: FloatArray, v: FloatArray, origin: tuple[float, float] | None):  # noqa: ANN202
+def _regrid_lonlat(
+    lon: FloatArray, lat: FloatArray, u: FloatArray, v: FloatArray, origin: tuple[float, float] | None
+):
     if np.any(lon > 180.0):
         wrapped = np.where(lon > 180.0, lon - 360.0, lon)
         if np.all(np.diff(wrapped) > 0):
@@ -326,7 +387,9 @@ def _regrid_lonlat(lon: FloatArray, lat: FloatArray, u: FloatArray, v: FloatArra
     lon0, lat0 = origin if origin is not None else (0.5 * (lon[0] + lon[-1]), 0.5 * (lat[0] + lat[-1]))
     proj = LocalProjection(lat0_deg=float(lat0), lon0_deg=float(lon0))
     # Extent: the largest metric rectangle inside the lon/lat box (its corners in the local plane).
-    cx, cy = proj.to_local(np.array([lon[0], lon[-1], lon[0], lon[-1]]), np.array([lat[0], lat[0], lat[-1], lat[-1]]))
+    cx, cy = proj.to_local(
+        np.array([lon[0], lon[-1], lon[0], lon[-1]]), np.array([lat[0], lat[0], lat[-1], lat[-1]])
+    )
     x0, x1 = max(cx[0], cx[2]), min(cx[1], cx[3])
     y0, y1 = max(cy[0], cy[1]), min(cy[2], cy[3])
     ex, _ = proj.to_local(np.array([lon0, lon0 + np.min(np.diff(lon))]), np.array([lat0, lat0]))
@@ -344,14 +407,16 @@ def _regrid_lonlat(lon: FloatArray, lat: FloatArray, u: FloatArray, v: FloatArra
 
 
 def land_obstacles(field: GridCurrent) -> OccupancyGrid | None:
-    """Land cells of a gridded current as an occupancy grid (one cell per node, centred on it), or ``None``."""
+    """Land cells of a gridded current as an occupancy grid (a cell centred on each node), or ``None``."""
     land = field.land_mask()
     if not land.any():
         return None
     dx, dy = field.spacing_m
     if not np.isclose(dx, dy, rtol=1e-6):
         raise DataError("land masks need square grid cells")
-    return OccupancyGrid(x0_m=float(field.x_m[0] - 0.5 * dx), y0_m=float(field.y_m[0] - 0.5 * dy), cell_m=dx, occupied=land)
+    return OccupancyGrid(
+        x0_m=float(field.x_m[0] - 0.5 * dx), y0_m=float(field.y_m[0] - 0.5 * dy), cell_m=dx, occupied=land
+    )
 
 
 def write_current_netcdf(
@@ -373,8 +438,16 @@ def write_current_netcdf(
     data_dims: tuple[str, ...]
     coords: dict = {}
     if projection is None:
-        coords["x"] = ("x", field.x_m, {"standard_name": "projection_x_coordinate", "units": "m", "axis": "X"})
-        coords["y"] = ("y", field.y_m, {"standard_name": "projection_y_coordinate", "units": "m", "axis": "Y"})
+        coords["x"] = (
+            "x",
+            field.x_m,
+            {"standard_name": "projection_x_coordinate", "units": "m", "axis": "X"},
+        )
+        coords["y"] = (
+            "y",
+            field.y_m,
+            {"standard_name": "projection_y_coordinate", "units": "m", "axis": "Y"},
+        )
         data_dims = ("y", "x")
     else:
         lon, _ = projection.to_lonlat(field.x_m, np.zeros_like(field.x_m))
@@ -384,12 +457,24 @@ def write_current_netcdf(
         data_dims = ("latitude", "longitude")
     if field.time_s is not None:
         base = np.datetime64(time_origin, "s")
-        coords["time"] = ("time", base + (field.time_s * 1e3).astype("timedelta64[ms]"), {"standard_name": "time"})
+        coords["time"] = (
+            "time",
+            base + (field.time_s * 1e3).astype("timedelta64[ms]"),
+            {"standard_name": "time"},
+        )
         data_dims = ("time", *data_dims)
     else:
         u, v = u[0], v[0]
-    attrs_u = {"standard_name": "eastward_sea_water_velocity", "units": "m s-1", "long_name": "eastward current"}
-    attrs_v = {"standard_name": "northward_sea_water_velocity", "units": "m s-1", "long_name": "northward current"}
+    attrs_u = {
+        "standard_name": "eastward_sea_water_velocity",
+        "units": "m s-1",
+        "long_name": "eastward current",
+    }
+    attrs_v = {
+        "standard_name": "northward_sea_water_velocity",
+        "units": "m s-1",
+        "long_name": "northward current",
+    }
     ds = xr.Dataset(
         {"uo": (data_dims, u, attrs_u), "vo": (data_dims, v, attrs_v)},
         coords=coords,

@@ -85,7 +85,7 @@ class EnergyBudget:
 
     @property
     def max_hop_m(self) -> float:
-        """Longest single hop: ``max_flight_time * flight_speed`` (1333 m in the thesis, 1235 m with 1852 m)."""
+        """Longest single hop: ``max_flight_time * flight_speed`` (1333 m in the thesis, 1235 m at 1852 m)."""
         return self.max_flight_time_s * self.flight_speed_mps
 
     @property

@@ -142,11 +142,11 @@ class ObstacleMap:
         return (x_m >= x0) & (x_m <= x1) & (y_m >= y0) & (y_m <= y1)
 
     def is_free(self, points_m: ArrayLike) -> BoolArray:
-        """``(...)`` bool: inside the bounds and clear of every (inflated) obstacle; ``points_m : (..., 2)``."""
+        """``(...)`` bool: inside the bounds and clear of every (inflated) obstacle; ``points_m (..., 2)``."""
         p = np.asarray(points_m, dtype=float)
         return self.is_free_xy(p[..., 0], p[..., 1])
 
-    def is_free_xy(self, x_m, y_m):  # noqa: ANN001, ANN201 (floats in, bool out; arrays in, arrays out)
+    def is_free_xy(self, x_m, y_m):
         """Like :meth:`is_free` on separate coordinates; Python floats give a Python bool (fast path)."""
         if isinstance(x_m, float | int) and isinstance(y_m, float | int):
             return self._is_free_scalar(float(x_m), float(y_m))

@@ -11,16 +11,21 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.patches import Polygon, Rectangle  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.patches import Polygon, Rectangle
 
-from oceanloc._typing import FloatArray  # noqa: E402
-from oceanloc.planning.drift_rrt.path import DriftPath  # noqa: E402
-from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree  # noqa: E402
+from oceanloc._typing import FloatArray
+from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree
 
-PATH_COLOURS = {"thesis-single": "tab:orange", "thesis-optimality-seeking": "tab:red", "oceanloc": "magenta", "best achievable": "black"}
+PATH_COLOURS = {
+    "thesis-single": "tab:orange",
+    "thesis-optimality-seeking": "tab:red",
+    "oceanloc": "magenta",
+    "best achievable": "black",
+}
 
 
 def _save(fig: plt.Figure, path: Path) -> Path:
@@ -42,7 +47,16 @@ def draw_map(ax: Axes, problem: DriftProblem, *, quiver_n: int = 21, km: bool = 
         ax.add_patch(Rectangle((a * s, c * s), (b - a) * s, (d - c) * s, color="0.15", zorder=3))
         if obs.inflation_m > 0:
             m = obs.inflation_m
-            ax.add_patch(Rectangle(((a - m) * s, (c - m) * s), (b - a + 2 * m) * s, (d - c + 2 * m) * s, fill=False, ls=":", color="0.3"))
+            ax.add_patch(
+                Rectangle(
+                    ((a - m) * s, (c - m) * s),
+                    (b - a + 2 * m) * s,
+                    (d - c + 2 * m) * s,
+                    fill=False,
+                    ls=":",
+                    color="0.3",
+                )
+            )
     for poly in obs.polygons_m:
         ax.add_patch(Polygon(poly * s, closed=True, color="0.15", zorder=3))
     if obs.grid is not None:
@@ -59,7 +73,11 @@ def draw_map(ax: Axes, problem: DriftProblem, *, quiver_n: int = 21, km: bool = 
         )
     ax.plot(*(problem.start_m * s), "p", color="tab:green", ms=13, mec="k", zorder=5, label="start")
     ax.plot(*(problem.goal_m * s), "*", color="tab:red", ms=15, mec="k", zorder=5, label="goal")
-    ax.add_patch(plt.Circle(tuple(problem.goal_m * s), problem.goal_tolerance_m * s, fill=False, color="tab:red", lw=0.8))
+    ax.add_patch(
+        plt.Circle(
+            tuple(problem.goal_m * s), problem.goal_tolerance_m * s, fill=False, color="tab:red", lw=0.8
+        )
+    )
     ax.set_xlim(x0 * s, x1 * s)
     ax.set_ylim(y0 * s, y1 * s)
     ax.set_aspect("equal")
@@ -68,7 +86,9 @@ def draw_map(ax: Axes, problem: DriftProblem, *, quiver_n: int = 21, km: bool = 
     ax.set_ylabel(f"north, {unit}")
 
 
-def draw_path(ax: Axes, path: DriftPath, colour: str, label: str, *, km: bool = True, lw: float = 2.0) -> None:
+def draw_path(
+    ax: Axes, path: DriftPath, colour: str, label: str, *, km: bool = True, lw: float = 2.0
+) -> None:
     """Drift edges solid, flights dashed with take-off/landing circles."""
     s = 1e-3 if km else 1.0
     p = path.points_m * s
@@ -79,7 +99,9 @@ def draw_path(ax: Axes, path: DriftPath, colour: str, label: str, *, km: bool = 
         ax.plot(seg[:, 0], seg[:, 1], "-", color=colour, lw=lw, label=label if first else None, zorder=4)
         first = False
     for seg in segs[path.flight]:
-        ax.plot(seg[:, 0], seg[:, 1], "--", color=colour, lw=lw * 0.8, zorder=4, label=label if first else None)
+        ax.plot(
+            seg[:, 0], seg[:, 1], "--", color=colour, lw=lw * 0.8, zorder=4, label=label if first else None
+        )
         ax.plot(seg[:, 0], seg[:, 1], "o", color=colour, mfc="none", ms=6, zorder=4)
         first = False
 
@@ -94,11 +116,19 @@ def draw_tree(ax: Axes, tree: SearchTree, *, km: bool = True) -> None:
     hop = tree.hop[1:]
     from matplotlib.collections import LineCollection
 
-    ax.add_collection(LineCollection(np.stack([a[~hop], b[~hop]], axis=1), colors="k", linewidths=0.4, alpha=0.6, zorder=2))
-    ax.add_collection(LineCollection(np.stack([a[hop], b[hop]], axis=1), colors="tab:green", linewidths=0.6, alpha=0.7, zorder=2))
+    ax.add_collection(
+        LineCollection(np.stack([a[~hop], b[~hop]], axis=1), colors="k", linewidths=0.4, alpha=0.6, zorder=2)
+    )
+    ax.add_collection(
+        LineCollection(
+            np.stack([a[hop], b[hop]], axis=1), colors="tab:green", linewidths=0.6, alpha=0.7, zorder=2
+        )
+    )
 
 
-def tree_figure(path: Path, problem: DriftProblem, tree: SearchTree, plan: DriftPath | None, title: str) -> Path:
+def tree_figure(
+    path: Path, problem: DriftProblem, tree: SearchTree, plan: DriftPath | None, title: str
+) -> Path:
     """Thesis Figs. 46 and 50: the DR-RRT* tree, its drift and hop branches and the final path."""
     fig, ax = plt.subplots(figsize=(7, 7))
     draw_map(ax, problem)
@@ -121,7 +151,9 @@ def paths_figure(path: Path, problem: DriftProblem, plans: Mapping[str, DriftPat
     return _save(fig, path)
 
 
-def energy_figure(path: Path, energies: Mapping[str, FloatArray], direct_wh: float, best_wh: float, title: str) -> Path:
+def energy_figure(
+    path: Path, energies: Mapping[str, FloatArray], direct_wh: float, best_wh: float, title: str
+) -> Path:
     """Thesis Figs. 51/53: flight energy of every run, with direct flight and the best achievable."""
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for name, e in energies.items():
@@ -149,9 +181,21 @@ def following_figure(
     draw_map(ax, problem)
     draw_path(ax, plan, "magenta", "plan")
     for takeoff in plan.hops_m()[:, 0]:
-        ax.add_patch(plt.Circle(tuple(takeoff * 1e-3), watch_circle_m * 1e-3, fill=False, color="tab:purple", lw=1.0, zorder=5))
+        ax.add_patch(
+            plt.Circle(
+                tuple(takeoff * 1e-3), watch_circle_m * 1e-3, fill=False, color="tab:purple", lw=1.0, zorder=5
+            )
+        )
     for i, track in enumerate(tracks):
-        ax.plot(track[::10, 0] * 1e-3, track[::10, 1] * 1e-3, "+", ms=4, color="tab:red", alpha=0.6, label="followed" if i == 0 else None)
+        ax.plot(
+            track[::10, 0] * 1e-3,
+            track[::10, 1] * 1e-3,
+            "+",
+            ms=4,
+            color="tab:red",
+            alpha=0.6,
+            label="followed" if i == 0 else None,
+        )
     for h in hops:
         for seg in h:
             ax.plot(seg[:, 0] * 1e-3, seg[:, 1] * 1e-3, ":", color="tab:red", lw=0.8, alpha=0.6)

@@ -52,7 +52,7 @@ THESIS_TABLE4: dict[str, dict[str, float]] = {
         "compute_s_std": 0.018,
     },
 }
-"""Table 4 (MATLAB on a 3.4 GHz Core i7-2600): mean and standard deviation of flight energy and compute time."""
+"""Table 4 (MATLAB, 3.4 GHz Core i7-2600): mean and standard deviation of flight energy and compute time."""
 
 FIELD_REFERENCE_OPTIONS = dataclasses.replace(REFERENCE_OPTIONS, spacing_m=100.0)
 """Random fields use a 100 m reference lattice (on the fixed field it agrees with 50 m within 0.1 %)."""
@@ -74,7 +74,7 @@ def thesis_random_obstacles(rng: np.random.Generator, problem: DriftProblem, n: 
     stops generating when an index is 0 (a MATLAB error caught by its ``try``); here that obstacle is drawn
     again. A field that covers the start or the goal is drawn again (the thesis' runs all had both free).
     """
-    x0, x1, y0, y1 = problem.space.bounds_m
+    x0, x1, _y0, y1 = problem.space.bounds_m
     cell = (x1 - x0) / 20.0
     for _ in range(1000):
         rects = []
@@ -83,7 +83,14 @@ def thesis_random_obstacles(rng: np.random.Generator, problem: DriftProblem, n: 
             w, h = (round(4.2 * float(u)) for u in rng.random(2))
             if col == 0 or row == 0:
                 continue
-            rects.append([x0 - cell + cell * col, x0 + cell * (col + w), y1 + cell - cell * (row + h), y1 + 2 * cell - cell * row])
+            rects.append(
+                [
+                    x0 - cell + cell * col,
+                    x0 + cell * (col + w),
+                    y1 + cell - cell * (row + h),
+                    y1 + 2 * cell - cell * row,
+                ]
+            )
         obstacles = ObstacleMap(bounds_m=problem.space.bounds_m, rectangles_m=np.asarray(rects))
         if bool(obstacles.is_free(problem.start_m)) and bool(obstacles.is_free(problem.goal_m)):
             return obstacles
@@ -113,7 +120,7 @@ class PlannerRuns:
 
 @dataclass(frozen=True, slots=True)
 class _PlanTask:
-    """Picklable Monte Carlo task: run ``planner`` on the problems, run ``r`` on field ``r % len(problems)``."""
+    """Picklable Monte Carlo task: ``planner`` on the problems, run ``r`` on field ``r % len(problems)``."""
 
     planner: str
     problems: tuple[DriftProblem, ...]
@@ -149,7 +156,7 @@ def run_planner(
     executor: Executor | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> PlannerRuns:
-    """Monte Carlo of one planner; run ``r`` uses problem ``r % len(problems)`` and generator ``(seed, r)``."""
+    """Monte Carlo of one planner; run ``r`` uses problem ``r % len(problems)``, generator ``(seed, r)``."""
     task = _PlanTask(planner, tuple(problems), seed, iterations)
     chunks = run_chunked(task, runs, executor=executor, progress=progress)
     cols = concat_fields(chunks, ("success", "energy_wh", "compute_s", "field"))
@@ -239,7 +246,7 @@ class DillardReport:
     reference_options: LatticeOptions
 
     def as_json(self) -> dict:
-        """The ``--json`` payload, exactly ``{direct_flight_wh, planners: {name: {...}}, best_achievable_wh}``."""
+        """The ``--json`` payload, ``{direct_flight_wh, planners: {name: {...}}, best_achievable_wh}``."""
         return {
             "direct_flight_wh": self.direct_flight_wh,
             "planners": {name: s.as_json() for name, s in self.planners.items()},
@@ -296,7 +303,9 @@ def reproduce_dillard_drrt(
 
     tic = time.perf_counter()
     ref_options = dataclasses.replace(REFERENCE_OPTIONS, spacing_m=reference_spacing_m)
-    field_options = dataclasses.replace(REFERENCE_OPTIONS, spacing_m=max(2.0 * reference_spacing_m, FIELD_REFERENCE_OPTIONS.spacing_m))
+    field_options = dataclasses.replace(
+        REFERENCE_OPTIONS, spacing_m=max(2.0 * reference_spacing_m, FIELD_REFERENCE_OPTIONS.spacing_m)
+    )
     reference = best_achievable(problem, ref_options)
     best = reference.flight_energy_wh
     if progress:
@@ -305,7 +314,9 @@ def reproduce_dillard_drrt(
     summaries: dict[str, PlannerSummary] = {}
     for name in PLANNER_NAMES:
         its = iterations if name == "thesis-optimality-seeking" else None
-        res = run_planner(name, [problem], runs, seed, iterations=its, executor=executor, progress=tick(name, runs))
+        res = run_planner(
+            name, [problem], runs, seed, iterations=its, executor=executor, progress=tick(name, runs)
+        )
         per_planner[name] = res
         summaries[name] = summarize(res, direct, best)
     field_summaries: dict[str, FieldsSummary] = {}
@@ -322,7 +333,15 @@ def reproduce_dillard_drrt(
         for name in PLANNER_NAMES:
             its = iterations if name == "thesis-optimality-seeking" else None
             total = fields * field_runs
-            res = run_planner(name, problems, total, seed + 2, iterations=its, executor=executor, progress=tick(f"{name} (random fields)", total))
+            res = run_planner(
+                name,
+                problems,
+                total,
+                seed + 2,
+                iterations=its,
+                executor=executor,
+                progress=tick(f"{name} (random fields)", total),
+            )
             field_summaries[name] = _fields_summary(res, problems, field_best)
     return DillardReport(
         direct_flight_wh=direct,

@@ -35,7 +35,9 @@ class SwapResult:
     min_separation_m: float
 
 
-def swap_positions(problem: DriftProblem, planner: Replanner, rngs: tuple[np.random.Generator, np.random.Generator]) -> SwapResult:
+def swap_positions(
+    problem: DriftProblem, planner: Replanner, rngs: tuple[np.random.Generator, np.random.Generator]
+) -> SwapResult:
     """Plan drifter 1 from ``problem.start_m`` to ``problem.goal_m`` and drifter 2 the other way."""
     other = dataclasses.replace(problem, start_m=problem.goal_m, goal_m=problem.start_m)
     r1 = planner(problem, rngs[0])

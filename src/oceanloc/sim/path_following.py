@@ -46,8 +46,10 @@ class _TrueCurrent:
         return self.cos_s * u - self.sin_s * v + self.noise_u, self.sin_s * u + self.cos_s * v + self.noise_v
 
 
-def gauss_markov_noise(rng: np.random.Generator, n_steps: int, dt_s: float, sigma_mps: float, tau_s: float) -> FloatArray:
-    """``(n_steps, 2)`` stationary first-order Gauss-Markov current, std ``sigma`` per component, time scale ``tau``."""
+def gauss_markov_noise(
+    rng: np.random.Generator, n_steps: int, dt_s: float, sigma_mps: float, tau_s: float
+) -> FloatArray:
+    """``(n_steps, 2)`` stationary first-order Gauss-Markov current (std ``sigma``, time scale ``tau``)."""
     a = math.exp(-dt_s / tau_s)
     w = rng.standard_normal((n_steps, 2)) * sigma_mps * math.sqrt(1.0 - a * a)
     out = np.empty((n_steps, 2))
@@ -135,9 +137,13 @@ def follow_plans(
     n = len(rngs)
     dt = problem.propagator.dt_s
     limit = max_duration_s if max_duration_s is not None else 3.0 * plan.duration_s + 12 * 3600.0
-    n_steps = int(math.ceil(limit / dt))
+    n_steps = math.ceil(limit / dt)
     fs = settings
-    noise = np.stack([gauss_markov_noise(g, n_steps + 1, dt, fs.noise_mps, fs.noise_correlation_s) for g in rngs]) if n else np.zeros((0, n_steps + 1, 2))
+    noise = (
+        np.stack([gauss_markov_noise(g, n_steps + 1, dt, fs.noise_mps, fs.noise_correlation_s) for g in rngs])
+        if n
+        else np.zeros((0, n_steps + 1, 2))
+    )
     cos_s = fs.current_scale * math.cos(fs.current_rotation_rad)
     sin_s = fs.current_scale * math.sin(fs.current_rotation_rad)
     step = step_function(problem.propagator.method)
@@ -295,7 +301,12 @@ class FollowingTask:
     def __call__(self, run_indices: np.ndarray) -> FollowingRuns:
         keep = int(np.sum(np.asarray(run_indices) < self.keep_tracks))
         return follow_plans(
-            self.problem, self.plan, self.settings, run_generators(self.seed, run_indices), self.replanner, keep_tracks=keep
+            self.problem,
+            self.plan,
+            self.settings,
+            run_generators(self.seed, run_indices),
+            self.replanner,
+            keep_tracks=keep,
         )
 
 

@@ -91,7 +91,9 @@ class LatticeOptions:
         if self.envelope not in ("dense", "stencil"):
             raise ConfigError(f"envelope must be 'dense' or 'stencil', got '{self.envelope}'")
         if self.refine_rounds < 0 or self.cloud_half_width < 1 or self.stencil_radius < 1:
-            raise ConfigError("refine_rounds >= 0, cloud_half_width >= 1 and stencil_radius >= 1 are required")
+            raise ConfigError(
+                "refine_rounds >= 0, cloud_half_width >= 1 and stencil_radius >= 1 are required"
+            )
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,7 +120,11 @@ class _Leg:
 
 def _legs_objective(problem: DriftProblem, legs: list[_Leg]) -> float:
     """Flight energy plus the price of time of a plan, from its legs (no re-simulation needed)."""
-    flown = sum(float(np.linalg.norm(leg.landing - leg.takeoff)) for leg in legs if leg.landing is not None and leg.takeoff is not None)
+    flown = sum(
+        float(np.linalg.norm(leg.landing - leg.takeoff))
+        for leg in legs
+        if leg.landing is not None and leg.takeoff is not None
+    )
     steps = sum(leg.drift_steps for leg in legs)
     hours = (steps * problem.propagator.dt_s + flown / problem.energy.flight_speed_mps) / 3600.0
     return float(problem.energy.flight_energy_wh(flown)) + problem.time_weight_wh_per_h * hours
@@ -209,7 +215,7 @@ class _ValueLattice:
         return idx.reshape(z.shape[:-1]), dist.reshape(z.shape[:-1])
 
     def goal_flight(self, z: FloatArray) -> FloatArray:
-        """Exact flight distance from ``(..., 2)`` points straight to the goal (``inf`` beyond a leg, or NaN)."""
+        """Flight distance from ``(..., 2)`` points straight to the goal (``inf`` beyond a leg, or NaN)."""
         return _goal_flight(self.problem, z)
 
     # -- envelope ---------------------------------------------------------------------------------------
@@ -223,14 +229,17 @@ class _ValueLattice:
             if self.problem.space.flights_avoid_obstacles:
                 shape = (nodes.shape[0], lands.shape[0], 2)
                 ok = self.problem.space.flight_valid(
-                    np.broadcast_to(self.nodes[:, None, :], shape), np.broadcast_to(self.landings[None], shape)
+                    np.broadcast_to(self.nodes[:, None, :], shape),
+                    np.broadcast_to(self.landings[None], shape),
                 )
                 dist = np.where(ok, dist, np.float32(np.inf))
             dist[dist > self.leg] = np.inf
             self._dense = dist
         else:
             if math.isfinite(self.leg):
-                raise ConfigError("the stencil envelope lets flights be any length; use max_leg_m = None with it")
+                raise ConfigError(
+                    "the stencil envelope lets flights be any length; use max_leg_m = None with it"
+                )
             r = self.opts.stencil_radius
             h = self.opts.spacing_m
             moves = [
@@ -317,7 +326,9 @@ class _ValueLattice:
         direct = np.min(traj.goal_cost + traj.time_cost, axis=0)
         return np.minimum(np.minimum(traj.finish, direct), via)
 
-    def best_takeoff(self, samples: FloatArray, time_cost: FloatArray, goal_cost: FloatArray) -> tuple[float, int, int]:
+    def best_takeoff(
+        self, samples: FloatArray, time_cost: FloatArray, goal_cost: FloatArray
+    ) -> tuple[float, int, int]:
         """Exact best ``(value, sample index, landing index)`` from one particle's ``(S + 1, 2)`` samples.
 
         ``time_cost (S + 1,)`` is the price of drifting to each sample, ``goal_cost (S + 1,)`` the flight from
@@ -344,7 +355,9 @@ class _ValueLattice:
             dist = np.hypot(z[:, None, 0] - lands[None, :, 0], z[:, None, 1] - lands[None, :, 1])
             if self.problem.space.flights_avoid_obstacles:
                 shape = (z.shape[0], lands.shape[0], 2)
-                ok = self.problem.space.flight_valid(np.broadcast_to(z[:, None, :], shape), np.broadcast_to(lands[None], shape))
+                ok = self.problem.space.flight_valid(
+                    np.broadcast_to(z[:, None, :], shape), np.broadcast_to(lands[None], shape)
+                )
                 dist = np.where(ok, dist, np.inf)
             # Zero-length "flights" (landing where one already is) are not moves.
             dist = np.where((dist <= self.leg) & (dist > 1e-6), dist, np.inf)
@@ -389,7 +402,9 @@ def _extract(
         promised = v
         landing = lattice.landings[j]
         is_goal = j == lattice.n_free
-        legs.append(_Leg(drift_steps=int(steps[s]), takeoff=samples[s].copy(), landing=landing, to_goal=is_goal))
+        legs.append(
+            _Leg(drift_steps=int(steps[s]), takeoff=samples[s].copy(), landing=landing, to_goal=is_goal)
+        )
         if is_goal:
             return legs
         p = j  # free node j is particle j of the lattice trajectories
@@ -402,7 +417,9 @@ def _extract(
     return _finish_direct(lattice, legs, samples, steps)
 
 
-def _finish_direct(lattice: _ValueLattice, legs: list[_Leg], samples: FloatArray, steps: IntArray) -> list[_Leg] | None:
+def _finish_direct(
+    lattice: _ValueLattice, legs: list[_Leg], samples: FloatArray, steps: IntArray
+) -> list[_Leg] | None:
     """Fly from the sample closest to the goal straight to it, in legs of at most ``max_leg`` if needed."""
     g = np.hypot(samples[:, 0] - lattice.goal[0], samples[:, 1] - lattice.goal[1])
     g[~np.isfinite(g)] = np.inf
@@ -422,9 +439,13 @@ def _finish_direct(lattice: _ValueLattice, legs: list[_Leg], samples: FloatArray
     else:
         return None
     points = [start, *list(stops), lattice.goal]
-    legs.append(_Leg(drift_steps=int(steps[s]), takeoff=start.copy(), landing=points[1], to_goal=len(points) == 2))
+    legs.append(
+        _Leg(drift_steps=int(steps[s]), takeoff=start.copy(), landing=points[1], to_goal=len(points) == 2)
+    )
     for i in range(1, len(points) - 1):
-        legs.append(_Leg(drift_steps=0, takeoff=points[i], landing=points[i + 1], to_goal=i == len(points) - 2))
+        legs.append(
+            _Leg(drift_steps=0, takeoff=points[i], landing=points[i + 1], to_goal=i == len(points) - 2)
+        )
     return legs
 
 
@@ -460,7 +481,9 @@ def _refine(
         fallback = np.zeros(0)
     # The goal cloud only matters through points that drift into the goal disk, which they do soon:
     # a short rollout (long enough to cross the cloud a few times at the current near the goal).
-    gu, gv = problem.propagator.field.velocity_xy(float(problem.goal_m[0]), float(problem.goal_m[1]), problem.t0_s)
+    gu, gv = problem.propagator.field.velocity_xy(
+        float(problem.goal_m[0]), float(problem.goal_m[1]), problem.t0_s
+    )
     speed = math.hypot(gu, gv) if math.isfinite(gu + gv) else 0.0
     reach_s = 4.0 * (half_extent_m + problem.goal_tolerance_m) / max(speed, 0.05)
     short = dataclasses.replace(problem, horizon_s=min(problem.horizon_s, reach_s))
@@ -496,11 +519,15 @@ def _refine(
         if p_idx.size == 0:
             return out_v, out_s, out_c
         z = samples[s_idx, p_idx]
-        dist = np.sqrt((z[:, None, 0] - targets[None, :, 0]) ** 2 + (z[:, None, 1] - targets[None, :, 1]) ** 2)
+        dist = np.sqrt(
+            (z[:, None, 0] - targets[None, :, 0]) ** 2 + (z[:, None, 1] - targets[None, :, 1]) ** 2
+        )
         dist[dist > leg] = np.inf
         if no_fly:
             shape = (z.shape[0], targets.shape[0], 2)
-            ok = problem.space.flight_valid(np.broadcast_to(z[:, None, :], shape), np.broadcast_to(targets[None], shape))
+            ok = problem.space.flight_valid(
+                np.broadcast_to(z[:, None, :], shape), np.broadcast_to(targets[None], shape)
+            )
             dist[~ok] = np.inf
         total = dist + target_values[None, :] + tcost[s_idx, p_idx][:, None]
         c_best = np.argmin(total, axis=1)
@@ -514,11 +541,15 @@ def _refine(
 
     n = len(stages) + 1
     values: list[FloatArray] = [np.empty(0)] * n
-    choice: list[tuple[IntArray, IntArray, BoolArray]] = [(np.empty(0, int), np.empty(0, int), np.empty(0, bool))] * n
+    choice: list[tuple[IntArray, IntArray, BoolArray]] = [
+        (np.empty(0, int), np.empty(0, int), np.empty(0, bool))
+    ] * n
     values[n - 1] = goal_traj.finish
     for i in range(n - 2, -1, -1):
         sl = slice(bounds[i], bounds[i + 1])
-        v_link, s_best, c_best = link(traj.samples[:, sl], traj.time_cost[:, sl], clouds[i + 1], values[i + 1])
+        v_link, s_best, c_best = link(
+            traj.samples[:, sl], traj.time_cost[:, sl], clouds[i + 1], values[i + 1]
+        )
         fb = fallback[sl]
         use_fb = fb <= v_link
         values[i] = np.where(use_fb, fb, v_link)
@@ -610,7 +641,12 @@ def plan_lattice(
     invalid = problem.validate_endpoints()
     if invalid is not None:
         return PlanResult(
-            status=PlanStatus.FAILED, path=None, flight_energy_wh=math.inf, direct_flight_wh=direct, compute_s=0.0, message=invalid
+            status=PlanStatus.FAILED,
+            path=None,
+            flight_energy_wh=math.inf,
+            direct_flight_wh=direct,
+            compute_s=0.0,
+            message=invalid,
         )
     offset = rng.uniform(0.0, opts.spacing_m, 2) if opts.random_offset else np.zeros(2)
     lattice = _ValueLattice(problem, opts, offset)
@@ -661,14 +697,21 @@ def plan_lattice(
         solutions=1 if ok else 0,
         cost=objective(problem, best_path),
         message=f"lattice {opts.spacing_m:g} m ({lattice.free_idx.size} free nodes), "
-        f"{best_path.hops_m().shape[0]} flight(s), value {problem.energy.flight_energy_wh(lattice.values[-1]):.2f} Wh",
+        f"{best_path.hops_m().shape[0]} flight(s), "
+        f"lattice value {problem.energy.flight_energy_wh(lattice.values[-1]):.2f} Wh",
     )
 
 
 def objective(problem: DriftProblem, path: DriftPath) -> float:
     """What the lattice planner minimizes: flight energy plus the price of time, Wh."""
-    return float(problem.energy.flight_energy_wh(path.flight_distance_m)) + problem.time_weight_wh_per_h * path.duration_s / 3600.0
+    return (
+        float(problem.energy.flight_energy_wh(path.flight_distance_m))
+        + problem.time_weight_wh_per_h * path.duration_s / 3600.0
+    )
 
 
 def _reaches(problem: DriftProblem, path: DriftPath) -> bool:
-    return bool(np.linalg.norm(path.end_m - problem.goal_m) < problem.goal_tolerance_m or np.allclose(path.end_m, problem.goal_m))
+    return bool(
+        np.linalg.norm(path.end_m - problem.goal_m) < problem.goal_tolerance_m
+        or np.allclose(path.end_m, problem.goal_m)
+    )

@@ -68,10 +68,7 @@ class GrowingNearest:
         if self._n > self._n_tree:
             buf = self._points[self._n_tree : self._n]
             d = np.hypot(buf[:, 0] - x_m, buf[:, 1] - y_m)
-            if d.size > kk:
-                part = np.argpartition(d, kk - 1)[:kk]
-            else:
-                part = np.arange(d.size)
+            part = np.argpartition(d, kk - 1)[:kk] if d.size > kk else np.arange(d.size)
             dists.append(d[part])
             idxs.append(part + self._n_tree)
         d = np.concatenate(dists)

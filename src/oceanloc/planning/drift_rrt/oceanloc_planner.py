@@ -7,8 +7,8 @@ and straight flights (:mod:`oceanloc.planning.drift_rrt.lattice`): every node of
 drifted at once, value iteration gives each node the least flight distance to the goal, the plan is read
 off from the start with exact distances, and one round of local refinement moves each landing point (and
 the final approach to the goal disk) on a finer grid around it. On the thesis scenario it saves about
-54.7 % of the direct-flight energy, 1.3 % above the best achievable, in well under 100 ms. The lattice offset is drawn from the planner's generator, so repeated runs sample different
-lattices.
+54.7 % of the direct-flight energy, 1.3 % above the best achievable, within 100 ms. The lattice offset
+is drawn from the planner's generator, so repeated runs sample different lattices.
 """
 
 from __future__ import annotations
@@ -18,7 +18,9 @@ import numpy as np
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions, plan_lattice
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult
 
-DEFAULT_OPTIONS = LatticeOptions(spacing_m=300.0, stride=4, envelope="dense", refine_rounds=1, cloud_half_width=4)
+DEFAULT_OPTIONS = LatticeOptions(
+    spacing_m=300.0, stride=4, envelope="dense", refine_rounds=1, cloud_half_width=4
+)
 """The settings measured in the benchmark and the reproduction."""
 
 

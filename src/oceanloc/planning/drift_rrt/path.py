@@ -137,7 +137,11 @@ class DriftPath:
     def hops_m(self) -> FloatArray:
         """``(H, 2, 2)`` take-off and landing point of every flight edge (a hop, or one leg of a chain)."""
         idx = np.flatnonzero(self.flight)
-        return np.stack([self.points_m[idx], self.points_m[idx + 1]], axis=1) if idx.size else np.zeros((0, 2, 2))
+        return (
+            np.stack([self.points_m[idx], self.points_m[idx + 1]], axis=1)
+            if idx.size
+            else np.zeros((0, 2, 2))
+        )
 
     def merged(self) -> DriftPath:
         """The same path with each run of consecutive flights replaced by one straight flight."""

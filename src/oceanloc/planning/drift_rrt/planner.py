@@ -30,7 +30,9 @@ class NamedPlanner:
         if self.name not in PLANNER_NAMES:
             raise ConfigError(f"planner must be one of {', '.join(PLANNER_NAMES)}; got '{self.name}'")
 
-    def __call__(self, problem: DriftProblem, rng: np.random.Generator, budget: PlanBudget | None = None) -> PlanResult:
+    def __call__(
+        self, problem: DriftProblem, rng: np.random.Generator, budget: PlanBudget | None = None
+    ) -> PlanResult:
         if self.name == "oceanloc":
             return plan_oceanloc(problem, rng, budget)
         mode = "single" if self.name == "thesis-single" else "optimality-seeking"

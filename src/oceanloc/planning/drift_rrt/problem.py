@@ -96,7 +96,7 @@ class DriftProblem:
     @property
     def horizon_steps(self) -> int:
         """Drift steps in the horizon."""
-        return max(int(round(self.horizon_s / self.propagator.dt_s)), 1)
+        return max(round(self.horizon_s / self.propagator.dt_s), 1)
 
     @property
     def time_weight_m_per_s(self) -> float:
@@ -213,7 +213,9 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
     if scenario.hdop_others_m is not None and scenario.hdop_target_m is not None:
         hdop = HdopTerm(others_m=scenario.hdop_others_m, target_m=scenario.hdop_target_m)
     return DriftProblem(
-        space=DriftSpace(obstacles=scenario.obstacles, flights_avoid_obstacles=scenario.flights_avoid_obstacles),
+        space=DriftSpace(
+            obstacles=scenario.obstacles, flights_avoid_obstacles=scenario.flights_avoid_obstacles
+        ),
         propagator=DriftPropagator(field=scenario.current, dt_s=scenario.dt_s, method=scenario.integrator),
         start_m=scenario.start_m,
         goal_m=scenario.goal_m,

@@ -56,7 +56,7 @@ class DriftSpace:
         """``(...)`` bool for ``(..., 2)`` states."""
         return self.obstacles.is_free(points_m)
 
-    def is_valid_xy(self, x_m, y_m):  # noqa: ANN001, ANN201 (floats or arrays)
+    def is_valid_xy(self, x_m, y_m):
         return self.obstacles.is_free_xy(x_m, y_m)
 
     def flight_valid(self, takeoff_m: ArrayLike, landing_m: ArrayLike) -> BoolArray:

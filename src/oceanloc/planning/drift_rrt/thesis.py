@@ -393,7 +393,13 @@ class _DrRrtStar:
         return float(self.p.energy.flight_energy_wh(path.flight_distance_m))
 
     def _result(
-        self, best: DriftPath | None, best_wh: float, best_cost: float, closest: int, iterations: int, solutions: int
+        self,
+        best: DriftPath | None,
+        best_wh: float,
+        best_cost: float,
+        closest: int,
+        iterations: int,
+        solutions: int,
     ) -> PlanResult:
         """The cheapest solution as it was when found (later rewiring may change the tree behind it)."""
         elapsed = time.perf_counter() - self.tic
@@ -432,5 +438,6 @@ class _DrRrtStar:
             cost=self.cum[closest],
             tree=tree,
             message=f"goal not reached in {iterations} iterations; closest node "
-            f"{math.hypot(self.X[closest] - self.p.goal_m[0], self.Y[closest] - self.p.goal_m[1]):.0f} m from the goal",
+            f"{math.hypot(self.X[closest] - self.p.goal_m[0], self.Y[closest] - self.p.goal_m[1]):.0f} m "
+            "from the goal",
         )
