@@ -163,15 +163,13 @@ class DriftPropagator:
         closest[active] = p0[active]
         best[active] = ab
         ab = np.where(ab < tol, -np.inf, ab)
-        step = step_function(self.method)
-        field = self.field
+        stepper = _CellStepper.build(self, space) or _GenericStepper(self, space)
+        state = stepper.start(ax, ay)
         dt = self.dt_s
-        valid = space.is_valid_xy
         for k in range(1, n_steps + 1):
             if active.size == 0:
                 break
-            xn, yn = step(field, ax, ay, t0_s + (k - 1) * dt, dt)
-            ok = valid(xn, yn)  # NaN (undefined current) compares False: invalid
+            xn, yn, ok, state = stepper.step(ax, ay, state, t0_s + (k - 1) * dt)
             if not ok.all():
                 dead = ~ok
                 end_step[active[dead]] = k - 1
@@ -179,6 +177,7 @@ class DriftPropagator:
                 xn = xn[ok]
                 yn = yn[ok]
                 ab = ab[ok]
+                state = state[ok] if state is not None else None
             ax, ay = xn, yn
             ex = ax - gx
             ey = ay - gy
@@ -208,3 +207,94 @@ class DriftPropagator:
             closest_m=closest,
             end_step=end_step,
         )
+
+
+class _GenericStepper:
+    """One drift step of the propagator, then the space's validity check (NaN positions are invalid)."""
+
+    def __init__(self, prop: DriftPropagator, space: DriftSpace) -> None:
+        self._step = step_function(prop.method)
+        self._field = prop.field
+        self._dt = prop.dt_s
+        self._valid = space.is_valid_xy
+
+    def start(self, x: FloatArray, y: FloatArray) -> None:
+        return None
+
+    def step(self, x: FloatArray, y: FloatArray, state: None, t: float) -> tuple[FloatArray, FloatArray, BoolArray, None]:
+        xn, yn = self._step(self._field, x, y, t, self._dt)
+        return xn, yn, self._valid(xn, yn), None
+
+
+class _CellStepper:
+    """Fast path for the thesis' dynamics: Euler steps on a steady piecewise-constant grid.
+
+    Each particle carries the index of its cell (the grid padded by one cell on every side). A step is
+    ``p + dt v(cell)``, with ``dt v`` tabulated per cell, and validity is read from a table classifying
+    every cell as free, blocked or mixed; only points in mixed cells (edges of the map, obstacles not
+    aligned with the cells) go through the space's exact check. Positions and validity are exactly those
+    of the generic path (same arithmetic), at about half the cost per step.
+    """
+
+    def __init__(self, dx_tab: FloatArray, dy_tab: FloatArray, status: np.ndarray, grid: tuple, space: DriftSpace) -> None:
+        self._dx = dx_tab
+        self._dy = dy_tab
+        self._status = status
+        self._x0, self._y0, self._hx, self._hy, self._nx, self._ny = grid
+        self._valid = space.is_valid_xy
+
+    @classmethod
+    def build(cls, prop: DriftPropagator, space: DriftSpace) -> _CellStepper | None:
+        from oceanloc.models.currents import GridCurrent
+
+        f = prop.field
+        obs = space.obstacles
+        if not (isinstance(f, GridCurrent) and f.interpolation == "cell" and f.u_mps.shape[0] == 1):
+            return None
+        if prop.method != "euler" or obs.polygons_m or obs.grid is not None or obs.inflation_m != 0.0:
+            return None
+        gx0, gx1, gy0, gy1 = f.bounds_m
+        bx0, bx1, by0, by1 = obs.bounds_m
+        if not (gx0 <= bx0 and bx1 <= gx1 and gy0 <= by0 and by1 <= gy1):
+            return None
+        hx, hy = f.spacing_m
+        nx, ny = f.x_m.size, f.y_m.size
+        dx_tab = np.full((ny + 2, nx + 2), np.nan)
+        dy_tab = np.full((ny + 2, nx + 2), np.nan)
+        dx_tab[1:-1, 1:-1] = prop.dt_s * f.u_mps[0]
+        dy_tab[1:-1, 1:-1] = prop.dt_s * f.v_mps[0]
+        # Cell e (padded) covers [x0 + (e - 1) h, x0 + e h); e = 0 and e = n + 1 lie off the grid.
+        ex = gx0 + (np.arange(nx + 2) - 1.0) * hx
+        ey = gy0 + (np.arange(ny + 2) - 1.0) * hy
+        cx0, cx1 = ex[None, :], ex[None, :] + hx
+        cy0, cy1 = ey[:, None], ey[:, None] + hy
+        inside = (cx0 >= bx0) & (cx1 <= bx1) & (cy0 >= by0) & (cy1 <= by1)
+        outside = (cx1 <= bx0) | (cx0 > bx1) | (cy1 <= by0) | (cy0 > by1)
+        status = np.where(inside, 1, np.where(outside, 0, 2)).astype(np.int8)
+        for a, b, c, d in obs.rectangles_m:
+            covered = (cx0 >= a) & (cx1 <= b) & (cy0 >= c) & (cy1 <= d)
+            touches = (cx1 > a) & (cx0 < b) & (cy1 > c) & (cy0 < d)
+            status = np.where(covered & (status == 1), 0, status)
+            status = np.where(touches & ~covered & (status == 1), 2, status).astype(np.int8)
+        return cls(dx_tab.ravel(), dy_tab.ravel(), status.ravel(), (gx0, gy0, hx, hy, nx, ny), space)
+
+    def _cells(self, x: FloatArray, y: FloatArray) -> np.ndarray:
+        fx = np.floor((x - self._x0) / self._hx) + 1.0
+        fy = np.floor((y - self._y0) / self._hy) + 1.0
+        ix = np.minimum(np.maximum(fx, 0.0), self._nx + 1).astype(np.intp)
+        iy = np.minimum(np.maximum(fy, 0.0), self._ny + 1).astype(np.intp)
+        return iy * (self._nx + 2) + ix
+
+    def start(self, x: FloatArray, y: FloatArray) -> np.ndarray:
+        return self._cells(x, y)
+
+    def step(self, x: FloatArray, y: FloatArray, cells: np.ndarray, t: float) -> tuple[FloatArray, FloatArray, BoolArray, np.ndarray]:
+        xn = x + self._dx[cells]
+        yn = y + self._dy[cells]
+        new = self._cells(xn, yn)
+        st = self._status[new]
+        ok = st == 1
+        mixed = st == 2
+        if mixed.any():
+            ok[mixed] = self._valid(xn[mixed], yn[mixed])
+        return xn, yn, ok, new
