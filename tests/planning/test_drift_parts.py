@@ -99,3 +99,26 @@ def test_path_from_segments_times():
     assert p.flight.tolist() == [False, False, True]
     with pytest.raises(ValueError):
         DriftPath(points_m=np.zeros((3, 2)), times_s=np.zeros(3), flight=np.zeros(1, dtype=bool))
+
+
+def test_fast_cell_rollout_is_identical_to_the_generic_one(monkeypatch):
+    from oceanloc.planning.drift_rrt import propagation
+    from oceanloc.reproduce.dillard_drrt import thesis_problem
+
+    problem = thesis_problem()
+    rng = np.random.default_rng(0)
+    pts = np.vstack(
+        [rng.uniform(-5000, 5000, size=(500, 2)), [[5000.0, 0.0], [-4000.0, -3000.0], [-4000.0, 4000.0]]]
+    )
+
+    def roll():
+        return problem.propagator.rollout(
+            problem.space, pts, 400, goal_m=problem.goal_m, goal_tolerance_m=100.0, stride=3
+        )
+
+    assert propagation._CellStepper.build(problem.propagator, problem.space) is not None
+    fast = roll()
+    monkeypatch.setattr(propagation._CellStepper, "build", classmethod(lambda cls, prop, space: None))
+    generic = roll()
+    for name in ("samples_m", "goal_distance_m", "goal_step", "reaches_goal", "closest_m", "end_step"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(generic, name))

@@ -50,7 +50,11 @@ def dillard_drrt(
     ),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address or local:N."),
 ) -> None:
-    """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner."""
+    """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner.
+
+    Compute times are wall-clock per run inside its worker; with several workers sharing the cores they
+    run longer than alone (use --workers 1, or make bench, for timings).
+    """
     state: dict[str, object] = {}
 
     def progress(stage: str, done: int, total: int) -> None:

@@ -221,7 +221,9 @@ class _GenericStepper:
     def start(self, x: FloatArray, y: FloatArray) -> None:
         return None
 
-    def step(self, x: FloatArray, y: FloatArray, state: None, t: float) -> tuple[FloatArray, FloatArray, BoolArray, None]:
+    def step(
+        self, x: FloatArray, y: FloatArray, state: None, t: float
+    ) -> tuple[FloatArray, FloatArray, BoolArray, None]:
         xn, yn = self._step(self._field, x, y, t, self._dt)
         return xn, yn, self._valid(xn, yn), None
 
@@ -236,7 +238,9 @@ class _CellStepper:
     of the generic path (same arithmetic), at about half the cost per step.
     """
 
-    def __init__(self, dx_tab: FloatArray, dy_tab: FloatArray, status: np.ndarray, grid: tuple, space: DriftSpace) -> None:
+    def __init__(
+        self, dx_tab: FloatArray, dy_tab: FloatArray, status: np.ndarray, grid: tuple, space: DriftSpace
+    ) -> None:
         self._dx = dx_tab
         self._dy = dy_tab
         self._status = status
@@ -288,7 +292,9 @@ class _CellStepper:
     def start(self, x: FloatArray, y: FloatArray) -> np.ndarray:
         return self._cells(x, y)
 
-    def step(self, x: FloatArray, y: FloatArray, cells: np.ndarray, t: float) -> tuple[FloatArray, FloatArray, BoolArray, np.ndarray]:
+    def step(
+        self, x: FloatArray, y: FloatArray, cells: np.ndarray, t: float
+    ) -> tuple[FloatArray, FloatArray, BoolArray, np.ndarray]:
         xn = x + self._dx[cells]
         yn = y + self._dy[cells]
         new = self._cells(xn, yn)
