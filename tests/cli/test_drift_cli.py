@@ -104,3 +104,14 @@ def test_bad_scenario_is_one_line_with_status_2(tmp_path, capsys):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert "error:" in err and "kind" in err and "Traceback" not in err
+
+
+def test_drift_plan_on_the_netcdf_product_writes_lonlat_geojson(tmp_path):
+    result = runner.invoke(
+        app, ["drift-plan", "--scenario", "dillard-drift-gyre-netcdf", "--out", str(tmp_path)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "dillard-drift-gyre.nc" in result.output
+    data = json.loads((tmp_path / "dillard-drift-gyre-netcdf-oceanloc.geojson").read_text())
+    lon, lat = data["features"][0]["geometry"]["coordinates"][0]
+    assert -117.7 < lon < -117.4 and 32.5 < lat < 32.7
