@@ -7,13 +7,19 @@ from oceanloc.cli.app import app, main
 
 
 def _all_commands(cmd: click.Command, prefix: tuple[str, ...] = ()):
+    # Typer's group class is not always a click.Group subclass: walk anything with sub-commands.
     yield prefix
-    if isinstance(cmd, click.Group):
-        for name, sub in cmd.commands.items():
-            yield from _all_commands(sub, (*prefix, name))
+    for name, sub in getattr(cmd, "commands", {}).items():
+        yield from _all_commands(sub, (*prefix, name))
 
 
 COMMANDS = list(_all_commands(typer.main.get_command(app)))
+
+
+def test_crawl_sees_every_group():
+    names = {" ".join(p) for p in COMMANDS}
+    assert {"scenarios list", "reproduce", "simulate"} <= names
+    assert len(COMMANDS) > 10
 
 
 @pytest.mark.parametrize("path", COMMANDS, ids=[" ".join(p) or "oceanloc" for p in COMMANDS])

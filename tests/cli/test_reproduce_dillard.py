@@ -38,9 +38,9 @@ def test_dillard_filters_command(tmp_path):
 
 def test_dillard_lab_tdoa_command(tmp_path, monkeypatch):
     scenario = tmp_path / "lab.toml"
-    from importlib import resources
+    from oceanloc.config.builtin import builtin_folder
 
-    text = resources.files("oceanloc.config.scenarios").joinpath("dillard-lab-tdoa.toml").read_text()
+    text = builtin_folder("flock").joinpath("dillard-lab-tdoa.toml").read_text()
     scenario.write_text(text.replace("duration_s = 120.0", "duration_s = 4.0"))
     figs = tmp_path / "lab"
     args = ["reproduce", "dillard-lab-tdoa", "--runs", "2", "--workers", "1", "--scenario", str(scenario)]

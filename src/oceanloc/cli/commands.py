@@ -5,6 +5,11 @@ One import per module; keep them sorted so that merges stay trivial.
 
 from __future__ import annotations
 
-import oceanloc.cli.dop
-import oceanloc.cli.reproduce_dillard
-import oceanloc.cli.tdoa  # noqa: F401
+from oceanloc.cli import (  # noqa: F401
+    dop,
+    drift_plan,
+    reproduce_dillard,
+    reproduce_dillard_drrt,
+    simulate_drift,
+    tdoa,
+)

@@ -2,7 +2,7 @@
 
 A scenario describes the sensor nodes, the target's motion, the measurements, the filters' settings and the
 Monte Carlo defaults. The AquaQuad thesis' scenarios ship as ``dillard-*.toml`` in
-``oceanloc/config/scenarios`` and are addressed by name (``dillard-filters``, ``dillard-lab-tdoa``)::
+``oceanloc/config/scenarios/flock`` and are addressed by name (``dillard-filters``, ``dillard-lab-tdoa``)::
 
     [scenario]
     name = "my-flock"
@@ -56,23 +56,18 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Literal, TypeAlias
 
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.config.toml_fields import Table, parse_toml, read_toml
+from oceanloc.config.builtin import builtin_names, resolve_scenario
+from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
 from oceanloc.models.measurements import MEASUREMENT_KINDS, MeasurementKind
 from oceanloc.models.motion import LinearMotionModel, constant_acceleration, constant_velocity
 from oceanloc.units import DEG
-
-FLOCK_SCENARIO_PREFIX = "dillard-"
-"""Built-in flock scenarios are the ``dillard-*.toml`` files of ``oceanloc.config.scenarios``."""
-
-_SCENARIO_PACKAGE = "oceanloc.config.scenarios"
 
 MotionKind: TypeAlias = Literal["constant-acceleration", "listing", "constant-velocity"]
 MOTION_KINDS: tuple[str, ...] = ("constant-acceleration", "listing", "constant-velocity")
@@ -167,27 +162,13 @@ def motion_model(kind: MotionKind, dt_s: float, process_noise: FloatArray) -> Li
 
 def builtin_flock_scenarios() -> list[str]:
     """Names of the flock scenarios shipped with oceanloc."""
-    files = resources.files(_SCENARIO_PACKAGE).iterdir()
-    return sorted(
-        f.name.removesuffix(".toml")
-        for f in files
-        if f.name.endswith(".toml") and f.name.startswith(FLOCK_SCENARIO_PREFIX)
-    )
+    return builtin_names("flock")
 
 
 def load_flock_scenario(name_or_path: str | Path) -> FlockScenario:
     """Load a built-in flock scenario by name or a scenario TOML file by path."""
-    path = Path(name_or_path)
-    if path.suffix == ".toml" or path.exists():
-        return flock_scenario_from_table(read_toml(path))
-    name = str(name_or_path)
-    if name not in builtin_flock_scenarios():
-        raise ConfigError(
-            f"'{name}' is neither a scenario file nor a built-in flock scenario "
-            f"(built-in: {', '.join(builtin_flock_scenarios())})"
-        )
-    text = resources.files(_SCENARIO_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
-    return flock_scenario_from_table(parse_toml(text, source=f"{name}.toml"))
+    root, _ = resolve_scenario(name_or_path, "flock")
+    return flock_scenario_from_table(root)
 
 
 def _nodes(t: Table) -> NodeSettings:

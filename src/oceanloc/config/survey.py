@@ -2,7 +2,7 @@
 
 A scenario describes the world (transponders), the vehicle, the range sensor, the prior, the
 estimator's stopping rules, a default planner and Monte Carlo settings. The papers' scenarios ship as
-TOML files in ``oceanloc/config/scenarios`` and are addressed by name (``garcia2019-m4``)::
+TOML files in ``oceanloc/config/scenarios/survey`` and are addressed by name (``garcia2019-m4``)::
 
     [scenario]
     name = "my-survey"
@@ -42,17 +42,15 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from oceanloc._typing import PLANNER_KINDS, FloatArray, PlannerKind
-from oceanloc.config.toml_fields import Table, parse_toml, read_toml
+from oceanloc.config.builtin import builtin_names, resolve_scenario
+from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
 from oceanloc.units import DEG
-
-_SCENARIO_PACKAGE = "oceanloc.config.scenarios"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -161,29 +159,14 @@ class SurveyScenario:
 
 
 def builtin_survey_scenarios() -> list[str]:
-    """Names of the scenarios shipped with oceanloc."""
-    files = resources.files(_SCENARIO_PACKAGE).iterdir()
-    # Flock-tracking scenarios (dillard-*.toml) share the folder; config.flock loads those.
-    return sorted(
-        f.name.removesuffix(".toml")
-        for f in files
-        if f.name.endswith(".toml") and not f.name.startswith("dillard-")
-    )
+    """Names of the survey scenarios shipped with oceanloc."""
+    return builtin_names("survey")
 
 
 def load_survey_scenario(name_or_path: str | Path) -> SurveyScenario:
-    """Load a built-in scenario by name or a scenario TOML file by path."""
-    text_path = Path(name_or_path)
-    if text_path.suffix == ".toml" or text_path.exists():
-        return survey_scenario_from_table(read_toml(text_path))
-    name = str(name_or_path)
-    if name not in builtin_survey_scenarios():
-        raise ConfigError(
-            f"'{name}' is neither a scenario file nor a built-in scenario "
-            f"(built-in: {', '.join(builtin_survey_scenarios())})"
-        )
-    text = resources.files(_SCENARIO_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
-    return survey_scenario_from_table(parse_toml(text, source=f"{name}.toml"))
+    """Load a built-in survey scenario by name or a scenario TOML file by path."""
+    root, _ = resolve_scenario(name_or_path, "survey")
+    return survey_scenario_from_table(root)
 
 
 def survey_scenario_from_table(root: Table) -> SurveyScenario:

@@ -1,0 +1,402 @@
+"""Drift-planning scenarios: TOML file -> validated, frozen :class:`DriftScenario`.
+
+The thesis' scenarios ship as ``oceanloc/config/scenarios/drift/*.toml`` and are addressed by name.
+A file describes the current, the map, the route, the vehicle, the flock for the HDOP term, the planner
+and the path-following trial::
+
+    [scenario]
+    name = "my-drift"
+    description = "..."
+
+    [currents]
+    kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | netcdf
+    interpolation = "cell"         # thesis-vortex: cell (the thesis' lookup) | linear
+    # vortex: scale_m; double-gyre: length_m, amplitude_mps, epsilon, period_h, origin_m;
+    # uniform: velocity_mps = [u, v];
+    # netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
+
+    [drift]
+    integrator = "euler"           # euler (the thesis) | rk4
+    dt_s = 60.0
+    horizon_h = 24.0               # longest drift considered from any point
+
+    [map]
+    bounds_m = [-5000.0, 5000.0, -5000.0, 5000.0]   # x_min, x_max, y_min, y_max (netcdf: the grid if omitted)
+    inflation_m = 0.0                               # safety margin around obstacles
+    flights_avoid_obstacles = false                 # true: obstacles are no-fly zones too
+    [[map.rectangles]]
+    x_m = [-4000.0, -2000.0]
+    y_m = [-4000.0, -3000.0]
+    [[map.polygons]]
+    vertices_m = [[0.0, 0.0], [1000.0, 0.0], [500.0, 800.0]]
+
+    [route]
+    start_m = [-4000.0, 4000.0]
+    goal_m = [3000.0, -3000.0]
+    goal_tolerance_m = 100.0
+
+    [vehicle]                      # Table 1 and (IV.14)
+    flight_power_w = 200.0
+    flight_speed_kn = 20.0
+    max_flight_time_s = 120.0
+    nautical_mile_m = 1852.0       # 2000 only to reproduce the thesis' energies
+    flight_legs = "hop"            # hop: legs of at most one hop; any: any length (thesis accounting)
+
+    [hdop]                         # flock geometry of the HDOP cost term (bearing-only, as the thesis)
+    others_m = [[5000.0, 5000.0], [5000.0, -5000.0], [-5000.0, -5000.0]]
+    target_m = [3100.0, -2900.0]
+
+    [planner]
+    kind = "oceanloc"              # oceanloc | thesis-single | thesis-optimality-seeking
+    seed = 1
+    time_weight_wh_per_h = 0.0     # price of time in the oceanloc planner (0: flight energy only)
+
+    [following]                    # path following in a "true" current (V.D)
+    watch_circle_m = 150.0
+    current_scale = 1.1            # true current = scale * rotate(planning current) + noise
+    current_rotation_deg = 5.0
+    noise_mps = 0.05
+    noise_correlation_s = 1800.0
+    stray_m = 400.0                # replan when farther than this from the planned track
+    max_replans = 20
+    runs = 200
+    seed = 7
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from oceanloc.config.builtin import builtin_folder, builtin_names, resolve_scenario
+from oceanloc.config.toml_fields import Table
+from oceanloc.geo.projection import LocalProjection
+from oceanloc.models.currents import (
+    CurrentField,
+    DoubleGyreCurrent,
+    UniformCurrent,
+    VortexCurrent,
+    thesis_vortex_grid,
+)
+from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
+from oceanloc.models.drift import METHODS, Method
+from oceanloc.models.energy import EnergyBudget
+from oceanloc.models.obstacles import ObstacleMap
+from oceanloc.units import DEG
+
+CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
+DRIFT_PLANNERS: tuple[str, ...] = ("thesis-single", "thesis-optimality-seeking", "oceanloc")
+"""``thesis-single``: DR-RRT* stopping at its first solution; ``thesis-optimality-seeking``: DR-RRT* over
+25,000 iterations keeping the cheapest solution; ``oceanloc``: the drift/hop lattice planner."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FollowingSettings:
+    """Path following in a true current that differs from the planning current (V.D).
+
+    Attributes
+    ----------
+    watch_circle_m : float
+        A hop fires when the drifter is within this distance of the planned take-off point.
+    current_scale : float
+        The true current is the planning current scaled by this factor ...
+    current_rotation_rad : float
+        ... and rotated by this angle ...
+    noise_mps : float
+        ... plus a random, spatially uniform current of this standard deviation per component ...
+    noise_correlation_s : float
+        ... correlated in time over this scale (first-order Gauss-Markov).
+    stray_m : float
+        Replan when the drifter is farther than this from the rest of its planned drift track.
+    max_replans : int
+        Give up after this many replans.
+    runs : int
+        Monte Carlo runs.
+    seed : int
+        Master seed.
+    """
+
+    watch_circle_m: float = 150.0
+    current_scale: float = 1.1
+    current_rotation_rad: float = 5.0 * DEG
+    noise_mps: float = 0.05
+    noise_correlation_s: float = 1800.0
+    stray_m: float = 400.0
+    max_replans: int = 20
+    runs: int = 200
+    seed: int = 7
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DriftScenario:
+    """A validated drift-planning scenario (build the planning problem with
+    :func:`oceanloc.planning.drift_rrt.problem.problem_from_scenario`).
+
+    Attributes
+    ----------
+    name, description : str
+    current : CurrentField
+        The planning current.
+    integrator : {"euler", "rk4"}
+    dt_s : float
+        Drift step.
+    horizon_s : float
+        Longest drift considered from any point.
+    obstacles : ObstacleMap
+        Bounds, obstacles (and land cells of a gridded product), inflation margin.
+    flights_avoid_obstacles : bool
+    start_m, goal_m : (2,) float
+    goal_tolerance_m : float
+    energy : EnergyBudget
+    max_leg_m : float or None
+        Longest flight leg (one hop) or ``None`` for flights of any length.
+    hdop_others_m : (n, 2) float or None
+        Other flock members for the HDOP term.
+    hdop_target_m : (2,) float or None
+    planner : str
+        Default planner (one of :data:`DRIFT_PLANNERS`).
+    seed : int
+        Default planner seed.
+    time_weight_wh_per_h : float
+        Price of time in the oceanloc planner's objective (0: flight energy only, as the thesis).
+    following : FollowingSettings
+    projection : LocalProjection or None
+        Local frame of a longitude/latitude current product (plans are written in lon/lat too).
+    currents_description : str
+    """
+
+    name: str
+    description: str = ""
+    current: CurrentField
+    integrator: Method = "rk4"
+    dt_s: float = 60.0
+    horizon_s: float = 24 * 3600.0
+    obstacles: ObstacleMap
+    flights_avoid_obstacles: bool = False
+    start_m: np.ndarray
+    goal_m: np.ndarray
+    goal_tolerance_m: float = 100.0
+    energy: EnergyBudget = field(default_factory=EnergyBudget)
+    max_leg_m: float | None = None
+    hdop_others_m: np.ndarray | None = None
+    hdop_target_m: np.ndarray | None = None
+    planner: str = "oceanloc"
+    seed: int = 1
+    time_weight_wh_per_h: float = 0.0
+    following: FollowingSettings = field(default_factory=FollowingSettings)
+    projection: LocalProjection | None = None
+    currents_description: str = ""
+
+
+def builtin_drift_scenarios() -> list[str]:
+    """Names of the drift scenarios shipped with oceanloc."""
+    return builtin_names("drift")
+
+
+def load_drift_scenario(name_or_path: str | Path) -> DriftScenario:
+    """Load a built-in drift scenario by name or a scenario file by path (data files resolve beside it)."""
+    root, folder = resolve_scenario(name_or_path, "drift")
+    return drift_scenario_from_table(root, base_dir=folder or Path(str(builtin_folder("drift"))))
+
+
+def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection | None, str, object]:
+    kind = t.str("kind", "thesis-vortex", choices=CURRENT_KINDS)
+    land = None
+    if kind == "thesis-vortex":
+        interp = t.str("interpolation", "cell", choices=("cell", "linear"))
+        scale = t.float("scale_m", 10_000.0, lo=1.0, lo_open=False)
+        f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
+        how = "piecewise constant per cell" if interp == "cell" else "bilinear"
+        desc = f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
+        return f, None, desc, land
+    if kind == "vortex":
+        scale = t.float("scale_m", 10_000.0, lo=1.0)
+        half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True)
+        return (
+            VortexCurrent(scale_m=scale, half_width_m=half),
+            None,
+            f"analytic thesis vortex (scale {scale:g} m)",
+            land,
+        )
+    if kind == "double-gyre":
+        length = t.float("length_m", 5000.0, lo=0.0, lo_open=True)
+        amp = t.float("amplitude_mps", 0.5, lo=0.0)
+        eps = t.float("epsilon", 0.0, lo=0.0, hi=1.0)
+        period_h = t.float("period_h", 24.0, lo=0.0, lo_open=True)
+        origin = t.vector("origin_m", 2, [0.0, 0.0])
+        f = DoubleGyreCurrent(
+            length_m=length,
+            amplitude_mps=amp,
+            epsilon=eps,
+            omega_rad_s=2 * math.pi / (period_h * 3600.0),
+            origin_m=(float(origin[0]), float(origin[1])),
+        )
+        return f, None, f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}", land
+    if kind == "uniform":
+        vel = t.vector("velocity_mps", 2)
+        return (
+            UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
+            None,
+            f"uniform {vel.tolist()} m/s",
+            land,
+        )
+    rel = t.str("path")
+    path = Path(rel) if Path(rel).is_absolute() else base_dir / rel
+    u = t.str("u", "") or None
+    v = t.str("v", "") or None
+    depth = t.int("depth_index", -1, lo=-1)
+    origin = t.vector("origin_lonlat_deg", 2, []) if t.has("origin_lonlat_deg") else None
+    interp = t.str("interpolation", "linear", choices=("cell", "linear"))
+    product = open_current_netcdf(
+        path,
+        u_var=u,
+        v_var=v,
+        depth_index=None if depth < 0 else depth,
+        origin_lonlat_deg=None if origin is None else (float(origin[0]), float(origin[1])),
+        interpolation=interp,  # type: ignore[arg-type]
+    )
+    return product.field, product.projection, product.description, land_obstacles(product.field)
+
+
+def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> DriftScenario:
+    """Validate a parsed drift scenario; every error names the file, table and field."""
+    base = base_dir or Path.cwd()
+    head = root.table("scenario")
+    name = head.str("name")
+    description = head.str("description", "")
+    head.check_unknown()
+
+    cur_t = root.table("currents")
+    field_, projection, cur_desc, land = _currents(cur_t, base)
+    cur_t.check_unknown()
+
+    drift_t = root.table("drift", required=False)
+    method = drift_t.str("integrator", "rk4", choices=METHODS)
+    dt = drift_t.float("dt_s", 60.0, lo=0.0, lo_open=True, hi=86_400.0)
+    horizon = drift_t.float("horizon_h", 24.0, lo=0.0, lo_open=True, hi=24.0 * 365)
+    drift_t.check_unknown()
+
+    map_t = root.table("map", required=False)
+    default_bounds = field_.bounds_m
+    if map_t.has("bounds_m") or default_bounds is None:
+        bounds = map_t.vector("bounds_m", 4)
+    else:
+        bounds = np.asarray(default_bounds, dtype=float)
+    if not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
+        raise map_t.error(
+            "bounds_m", f"must be [x_min, x_max, y_min, y_max] with min < max, got {bounds.tolist()}"
+        )
+    inflation = map_t.float("inflation_m", 0.0, lo=0.0)
+    no_fly = map_t.bool("flights_avoid_obstacles", False)
+    rects = []
+    for rt in map_t.tables("rectangles"):
+        xr = rt.vector("x_m", 2)
+        yr = rt.vector("y_m", 2)
+        if not (xr[0] < xr[1] and yr[0] < yr[1]):
+            raise rt.error(
+                "x_m",
+                f"needs increasing x_m = [x0, x1] and y_m = [y0, y1], got {xr.tolist()}, {yr.tolist()}",
+            )
+        rects.append([xr[0], xr[1], yr[0], yr[1]])
+        rt.check_unknown()
+    polys = []
+    for pt in map_t.tables("polygons"):
+        raw = pt._get("vertices_m", None)
+        try:
+            verts = np.asarray(raw, dtype=float)
+        except (TypeError, ValueError):
+            raise pt.error("vertices_m", "must be a list of [x, y] pairs") from None
+        if verts.ndim != 2 or verts.shape[1] != 2 or verts.shape[0] < 3 or not np.all(np.isfinite(verts)):
+            raise pt.error("vertices_m", f"needs at least three finite [x, y] vertices, got {raw!r}")
+        polys.append(verts)
+        pt.check_unknown()
+    map_t.check_unknown()
+    obstacles = ObstacleMap(
+        bounds_m=tuple(bounds.tolist()),
+        rectangles_m=np.asarray(rects, dtype=float).reshape(-1, 4),
+        polygons_m=tuple(polys),
+        grid=land,  # type: ignore[arg-type]
+        inflation_m=inflation,
+    )
+
+    route = root.table("route")
+    start = route.vector("start_m", 2)
+    goal = route.vector("goal_m", 2)
+    tol = route.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True)
+    route.check_unknown()
+
+    veh = root.table("vehicle", required=False)
+    energy = EnergyBudget(
+        base_load_w=veh.float("base_load_w", 5.0, lo=0.0),
+        sensing_w=veh.float("sensing_w", 10.0, lo=0.0),
+        sensing_hours_per_day=veh.float("sensing_hours_per_day", 6.0, lo=0.0, hi=24.0),
+        flight_power_w=veh.float("flight_power_w", 200.0, lo=0.0, lo_open=True),
+        flight_speed_kn=veh.float("flight_speed_kn", 20.0, lo=0.0, lo_open=True),
+        solar_wh_per_day=veh.float("solar_wh_per_day", 400.0, lo=0.0),
+        max_flight_time_s=veh.float("max_flight_time_s", 120.0, lo=0.0, lo_open=True),
+        nautical_mile_m=veh.float("nautical_mile_m", 1852.0, lo=0.0, lo_open=True),
+    )
+    legs = veh.str("flight_legs", "hop", choices=("hop", "any"))
+    veh.check_unknown()
+
+    hdop_t = root.table("hdop", required=False)
+    others = target = None
+    if hdop_t.has("others_m"):
+        raw = hdop_t._get("others_m", None)
+        try:
+            others = np.asarray(raw, dtype=float).reshape(-1, 2)
+        except (TypeError, ValueError):
+            raise hdop_t.error("others_m", "must be a list of [x, y] positions") from None
+        target = hdop_t.vector("target_m", 2)
+    hdop_t.check_unknown()
+
+    plan_t = root.table("planner", required=False)
+    planner = plan_t.str("kind", "oceanloc", choices=DRIFT_PLANNERS)
+    seed = plan_t.int("seed", 1, lo=0)
+    time_weight = plan_t.float("time_weight_wh_per_h", 0.0, lo=0.0)
+    plan_t.check_unknown()
+
+    fol_t = root.table("following", required=False)
+    following = FollowingSettings(
+        watch_circle_m=fol_t.float("watch_circle_m", 150.0, lo=0.0, lo_open=True),
+        current_scale=fol_t.float("current_scale", 1.1, lo=0.0),
+        current_rotation_rad=fol_t.float("current_rotation_deg", 5.0, lo=-180.0, hi=180.0) * DEG,
+        noise_mps=fol_t.float("noise_mps", 0.05, lo=0.0),
+        noise_correlation_s=fol_t.float("noise_correlation_s", 1800.0, lo=0.0, lo_open=True),
+        stray_m=fol_t.float("stray_m", 400.0, lo=0.0, lo_open=True),
+        max_replans=fol_t.int("max_replans", 20, lo=0),
+        runs=fol_t.int("runs", 200, lo=1),
+        seed=fol_t.int("seed", 7, lo=0),
+    )
+    fol_t.check_unknown()
+    root.check_unknown()
+
+    for key, point in (("start_m", start), ("goal_m", goal)):
+        if not bool(obstacles.is_free(point)):
+            raise route.error(key, f"{point.tolist()} is outside the map bounds or inside an obstacle")
+    return DriftScenario(
+        name=name,
+        description=description,
+        current=field_,
+        integrator=method,  # type: ignore[arg-type]
+        dt_s=dt,
+        horizon_s=horizon * 3600.0,
+        obstacles=obstacles,
+        flights_avoid_obstacles=no_fly,
+        start_m=start,
+        goal_m=goal,
+        goal_tolerance_m=tol,
+        energy=energy,
+        max_leg_m=energy.max_hop_m if legs == "hop" else None,
+        hdop_others_m=others,
+        hdop_target_m=target,
+        planner=planner,
+        seed=seed,
+        time_weight_wh_per_h=time_weight,
+        following=following,
+        projection=projection,
+        currents_description=cur_desc,
+    )

@@ -1,0 +1,105 @@
+"""Writers for drift/flight plans: CSV (every vertex) and GeoJSON (RFC 7946, longitude/latitude).
+
+CSV columns: ``t_s, x_m, y_m, mode`` (``drift`` or ``flight`` for the edge that *ends* at the vertex,
+``start`` for the first) and, when the plan is georeferenced, ``lon_deg, lat_deg``. GeoJSON needs WGS84
+coordinates, so it is written only with a :class:`~oceanloc.geo.projection.LocalProjection` (from a
+longitude/latitude current product, or an origin the user gives): a FeatureCollection with one LineString
+per drift leg and per flight (``properties.mode``) and one Point per take-off and landing.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from oceanloc.errors import ConfigError
+from oceanloc.geo.projection import LocalProjection
+from oceanloc.planning.drift_rrt.path import DriftPath
+
+
+def write_path_csv(path: str | Path, plan: DriftPath, projection: LocalProjection | None = None) -> Path:
+    """Every vertex of ``plan`` as CSV (see the module docstring)."""
+    p = Path(path)
+    modes = ["start"] + ["flight" if f else "drift" for f in plan.flight]
+    header = ["t_s", "x_m", "y_m", "mode"]
+    lonlat = None
+    if projection is not None:
+        header += ["lon_deg", "lat_deg"]
+        lonlat = projection.to_lonlat(plan.points_m[:, 0], plan.points_m[:, 1])
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        with p.open("w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(header)
+            for i in range(plan.n_points):
+                row: list[Any] = [
+                    f"{plan.times_s[i]:.1f}",
+                    f"{plan.points_m[i, 0]:.2f}",
+                    f"{plan.points_m[i, 1]:.2f}",
+                    modes[i],
+                ]
+                if lonlat is not None:
+                    row += [f"{lonlat[0][i]:.7f}", f"{lonlat[1][i]:.7f}"]
+                w.writerow(row)
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot write CSV ({exc})") from None
+    return p
+
+
+def path_geojson(
+    plan: DriftPath, projection: LocalProjection, properties: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The plan as a GeoJSON FeatureCollection (longitude, latitude)."""
+    lon, lat = projection.to_lonlat(plan.points_m[:, 0], plan.points_m[:, 1])
+    coords = np.column_stack([lon, lat])
+    features: list[dict[str, Any]] = []
+    if plan.n_points >= 2:
+        change = np.flatnonzero(np.diff(plan.flight.astype(np.int8)) != 0) + 1
+        starts = np.concatenate([[0], change])
+        ends = np.concatenate([change, [plan.flight.size]])
+        for a, b in zip(starts, ends, strict=True):
+            mode = "flight" if plan.flight[a] else "drift"
+            features.append(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "LineString", "coordinates": coords[a : b + 1].round(7).tolist()},
+                    "properties": {
+                        "mode": mode,
+                        "t_start_s": float(plan.times_s[a]),
+                        "t_end_s": float(plan.times_s[b]),
+                    },
+                }
+            )
+    for k, hop in enumerate(plan.hops_m()):
+        for role, point in (("take-off", hop[0]), ("landing", hop[1])):
+            plon, plat = projection.to_lonlat(point[0], point[1])
+            features.append(
+                {
+                    "type": "Feature",
+                    "geometry": {
+                        "type": "Point",
+                        "coordinates": [round(float(plon), 7), round(float(plat), 7)],
+                    },
+                    "properties": {"role": role, "hop": k},
+                }
+            )
+    return {"type": "FeatureCollection", "features": features, "properties": properties or {}}
+
+
+def write_path_geojson(
+    path: str | Path, plan: DriftPath, projection: LocalProjection, properties: dict[str, Any] | None = None
+) -> Path:
+    """Write :func:`path_geojson` to ``path``."""
+    p = Path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(
+            json.dumps(path_geojson(plan, projection, properties), indent=1) + "\n", encoding="utf-8"
+        )
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot write GeoJSON ({exc})") from None
+    return p

@@ -1,0 +1,180 @@
+"""Drift/hop lattice search: dynamic programming over drift trajectories and straight flights.
+
+Drifting costs no energy and flying costs energy in proportion to the distance flown (IV.14), so the
+cheapest way from any point to the goal is a value function ``V`` satisfying
+
+    V(p) = min( 0 if the drift from p enters the goal disk,
+                min over points s of the drift from p, landing points q:  |s - q| + V(q) )
+
+(drift from ``p``, take off at some point ``s`` of the drift, fly straight to ``q``; the goal is a landing
+point with ``V = 0``). This module solves it on a lattice of landing points ``q`` of spacing ``h``:
+
+1. every lattice node (and the start) is drifted with the problem's own propagator, all at once
+   (:meth:`DriftPropagator.rollout`), recording its trajectory every ``stride`` steps and its closest
+   approach to the goal;
+2. value iteration: the flight envelope ``D(z) = min_q |z - q| + V(q)`` is computed on the lattice (exactly
+   with a dense distance matrix for coarse lattices, or by relaxing a stencil of straight moves for fine
+   ones) and ``V(p) = min_s |s - n(s)| + D(n(s))`` over the samples ``s`` of ``p``'s drift, snapped to their
+   nearest node ``n(s)``, until ``V`` stops changing (each sweep allows one more flight);
+3. the plan is extracted from the start with exact distances (take-off sample and landing point by exact
+   minimization), then refined: candidate landing points on a fine local grid around each landing point
+   are drifted and a backward dynamic programme over these clouds picks the best combination; this repeats
+   on a finer cloud. The refined plan replaces the lattice plan only if its exact flight distance is
+   smaller.
+
+Every plan is re-simulated step by step with the propagator: its energy is exact for the problem's dynamics,
+and only its optimality depends on the lattice. Flights go straight; with ``problem.max_leg_m`` they are
+made of legs of at most that length landing on free lattice nodes. The field is taken as steady: every
+trajectory is integrated from the problem's start time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from oceanloc._typing import FloatArray
+from oceanloc.planning.drift_rrt.lattice_refine import refine_plan
+from oceanloc.planning.drift_rrt.lattice_values import (
+    EnvelopeKind,
+    LatticeOptions,
+    Leg,
+    SampledDrift,
+    ValueLattice,
+    extract_plan,
+    legs_objective,
+    sample_drift,
+)
+from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult, PlanStatus
+
+__all__ = ["EnvelopeKind", "LatticeOptions", "objective", "plan_lattice"]
+
+
+def _build_path(problem: DriftProblem, legs: list[Leg]) -> DriftPath:
+    prop, space = problem.propagator, problem.space
+    t = problem.t0_s
+    pos = problem.start_m
+    segments: list[tuple[FloatArray, bool]] = []
+    for leg in legs:
+        drift = prop.drift_polyline(space, pos, leg.drift_steps, t0_s=problem.t0_s)
+        segments.append((drift, False))
+        pos = drift[-1]
+        t += prop.dt_s * (drift.shape[0] - 1)
+        if leg.landing is None:
+            break
+        segments.append((np.vstack([pos, leg.landing]), True))
+        pos = np.asarray(leg.landing, dtype=float)
+        if leg.to_goal:
+            break
+    path = DriftPath.from_segments(
+        segments, t0_s=problem.t0_s, dt_s=prop.dt_s, flight_speed_mps=problem.energy.flight_speed_mps
+    )
+    # Flights of any length: consecutive flights are one straight flight (unless obstacles are no-fly zones,
+    # where the chain goes around them). With legs, each leg lands.
+    return path.merged() if problem.max_leg_m is None and not space.flights_avoid_obstacles else path
+
+
+def plan_lattice(
+    problem: DriftProblem,
+    rng: np.random.Generator,
+    budget: PlanBudget | None = None,
+    options: LatticeOptions | None = None,
+) -> PlanResult:
+    """Plan with the drift/hop lattice search (see the module docstring).
+
+    Parameters
+    ----------
+    problem : DriftProblem
+    rng : numpy.random.Generator
+        Draws the random offset of the lattice (if enabled).
+    budget : PlanBudget, optional
+        Unused: the search is deterministic given the lattice; its effort is set by ``options``.
+    options : LatticeOptions, optional
+
+    Returns
+    -------
+    PlanResult
+    """
+    opts = options or LatticeOptions()
+    tic = time.perf_counter()
+    direct = problem.direct_flight_wh
+    invalid = problem.validate_endpoints()
+    if invalid is not None:
+        return PlanResult(
+            status=PlanStatus.FAILED,
+            path=None,
+            flight_energy_wh=math.inf,
+            direct_flight_wh=direct,
+            compute_s=0.0,
+            message=invalid,
+        )
+    offset = rng.uniform(0.0, opts.spacing_m, 2) if opts.random_offset else np.zeros(2)
+    lattice = ValueLattice(problem, opts, offset)
+    points = np.concatenate([lattice.nodes[lattice.free_idx], problem.start_m[None]], axis=0)
+    traj = sample_drift(problem, points, opts.stride)
+    lattice.solve(traj)
+    start = points.shape[0] - 1
+    legs = extract_plan(lattice, traj, start, traj, opts.max_flights)
+    if legs is None:
+        return PlanResult(
+            status=PlanStatus.FAILED,
+            path=None,
+            flight_energy_wh=math.inf,
+            direct_flight_wh=direct,
+            compute_s=time.perf_counter() - tic,
+            message="no drift/flight sequence reaches the goal from the start",
+        )
+    start_traj = SampledDrift(
+        points=points[start:],
+        samples=traj.samples[:, start:],
+        steps=traj.steps[:, start:],
+        reaches=traj.reaches[start:],
+        goal_step=traj.goal_step[start:],
+        time_cost=traj.time_cost[:, start:],
+        finish=traj.finish[start:],
+        goal_cost=traj.goal_cost[:, start:],
+    )
+    best_cost = legs_objective(problem, legs)
+    extent = opts.spacing_m
+    for _ in range(opts.refine_rounds):
+        refined = refine_plan(lattice, problem, start_traj, traj, legs, opts, extent)
+        extent /= 4.0
+        if refined is None:
+            continue
+        cost = legs_objective(problem, refined)
+        if cost < best_cost - 1e-9:
+            legs, best_cost = refined, cost
+    best_path = _build_path(problem, legs)
+    ok = _reaches(problem, best_path)
+    energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
+    return PlanResult(
+        status=PlanStatus.EXACT if ok else PlanStatus.APPROXIMATE,
+        path=best_path,
+        flight_energy_wh=energy,
+        direct_flight_wh=direct,
+        compute_s=time.perf_counter() - tic,
+        iterations=int(lattice.free_idx.size),
+        solutions=1 if ok else 0,
+        cost=objective(problem, best_path),
+        message=f"lattice {opts.spacing_m:g} m ({lattice.free_idx.size} free nodes), "
+        f"{best_path.hops_m().shape[0]} flight(s), "
+        f"lattice value {problem.energy.flight_energy_wh(lattice.values[-1]):.2f} Wh",
+    )
+
+
+def objective(problem: DriftProblem, path: DriftPath) -> float:
+    """What the lattice planner minimizes: flight energy plus the price of time, Wh."""
+    return (
+        float(problem.energy.flight_energy_wh(path.flight_distance_m))
+        + problem.time_weight_wh_per_h * path.duration_s / 3600.0
+    )
+
+
+def _reaches(problem: DriftProblem, path: DriftPath) -> bool:
+    return bool(
+        np.linalg.norm(path.end_m - problem.goal_m) < problem.goal_tolerance_m
+        or np.allclose(path.end_m, problem.goal_m)
+    )

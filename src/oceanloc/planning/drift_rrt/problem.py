@@ -1,0 +1,228 @@
+"""The drift-planning problem, budgets and results (OMPL's ``ProblemDefinition`` and ``PlannerStatus``).
+
+A :class:`DriftProblem` bundles the space (bounds, obstacles), the propagator (current field and
+integrator), start, goal disk, the vehicle's energy budget (flight speed, power, longest hop) and the
+optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> PlanResult``.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from oceanloc._typing import BoolArray, FloatArray, IntArray
+from oceanloc.config.drift import DriftScenario
+from oceanloc.errors import ConfigError
+from oceanloc.models.energy import EnergyBudget
+from oceanloc.planning.drift_rrt.objective import HdopTerm
+from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.planning.drift_rrt.propagation import DriftPropagator
+from oceanloc.planning.drift_rrt.space import DriftSpace
+
+
+class PlanStatus(enum.Enum):
+    """Outcome of a planner (OMPL's ``PlannerStatus``)."""
+
+    EXACT = "exact"
+    """A path reaches the goal disk."""
+    APPROXIMATE = "approximate"
+    """No path reaches the goal; the returned path ends as close to it as the planner got."""
+    FAILED = "failed"
+    """No path at all (for example an invalid start)."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DriftProblem:
+    """Everything a drift planner needs.
+
+    Attributes
+    ----------
+    space : DriftSpace
+        Bounds and obstacles.
+    propagator : DriftPropagator
+        Current field and integrator.
+    start_m, goal_m : (2,) float
+        Start and goal, metres.
+    goal_tolerance_m : float
+        A path succeeds when it ends within this distance of the goal (100 m in the thesis).
+    energy : EnergyBudget
+        Flight power and speed, longest hop, solar income.
+    hdop : HdopTerm or None
+        Flock geometry for the HDOP cost term (the thesis planner needs it).
+    horizon_s : float
+        Longest drift the planners consider from any node (the trajectories of a stable vortex end in its
+        centre within a few hours; time-periodic fields need a horizon).
+    max_leg_m : float or None
+        Longest single flight leg in the oceanloc planners; ``None`` lets flights be any length, which is how
+        the thesis accounts its paths (consecutive hops merged into one straight flight).
+    t0_s : float
+        Start time (matters for time-dependent fields).
+    time_weight_wh_per_h : float
+        Price of time in the oceanloc planners' objective, Wh per hour of path: with 0 (the thesis, which
+        reports flight energy only) drifting is free however long it takes; in closed circulations
+        (gyres) a small price stops plans that circle for days to save a few watt-hours.
+    """
+
+    space: DriftSpace
+    propagator: DriftPropagator
+    start_m: FloatArray
+    goal_m: FloatArray
+    goal_tolerance_m: float = 100.0
+    energy: EnergyBudget = field(default_factory=EnergyBudget)
+    hdop: HdopTerm | None = None
+    horizon_s: float = 24 * 3600.0
+    max_leg_m: float | None = None
+    t0_s: float = 0.0
+    time_weight_wh_per_h: float = 0.0
+
+    def __post_init__(self) -> None:
+        start = np.asarray(self.start_m, dtype=float).reshape(2)
+        goal = np.asarray(self.goal_m, dtype=float).reshape(2)
+        if not (np.all(np.isfinite(start)) and np.all(np.isfinite(goal))):
+            raise ConfigError("start and goal must be finite (x, y) positions in metres")
+        if not self.goal_tolerance_m > 0:
+            raise ConfigError(f"goal tolerance must be positive, got {self.goal_tolerance_m}")
+        if not self.horizon_s > 0:
+            raise ConfigError(f"planning horizon must be positive, got {self.horizon_s}")
+        if not self.time_weight_wh_per_h >= 0:
+            raise ConfigError(f"time weight must not be negative, got {self.time_weight_wh_per_h}")
+        if self.max_leg_m is not None and not self.max_leg_m > 0:
+            raise ConfigError(f"max_leg_m must be positive or None, got {self.max_leg_m}")
+        object.__setattr__(self, "start_m", start)
+        object.__setattr__(self, "goal_m", goal)
+
+    @property
+    def horizon_steps(self) -> int:
+        """Drift steps in the horizon."""
+        return max(round(self.horizon_s / self.propagator.dt_s), 1)
+
+    @property
+    def time_weight_m_per_s(self) -> float:
+        """The time price in metres of flight per second (the lattice planner's unit)."""
+        return self.time_weight_wh_per_h / 3600.0 / self.energy.flight_wh_per_m
+
+    @property
+    def direct_flight_m(self) -> float:
+        return float(np.linalg.norm(self.goal_m - self.start_m))
+
+    @property
+    def direct_flight_wh(self) -> float:
+        """Baseline energy: fly straight from start to goal (the thesis' red line, 49.5 Wh)."""
+        return float(self.energy.flight_energy_wh(self.direct_flight_m))
+
+    def validate_endpoints(self) -> str | None:
+        """A message if the start or the goal is not a valid state, else ``None``."""
+        for name, point in (("start", self.start_m), ("goal", self.goal_m)):
+            if not bool(self.space.is_valid(point)):
+                return f"{name} {point.tolist()} is outside the map or inside an obstacle"
+        return None
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlanBudget:
+    """How long a planner may run: iterations (sampling planners) and/or wall-clock seconds."""
+
+    max_iterations: int | None = None
+    max_seconds: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.max_iterations is not None and self.max_iterations < 1:
+            raise ConfigError(f"max_iterations must be at least 1, got {self.max_iterations}")
+        if self.max_seconds is not None and not self.max_seconds > 0:
+            raise ConfigError(f"max_seconds must be positive, got {self.max_seconds}")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SearchTree:
+    """The tree a sampling planner grew (for figures).
+
+    Attributes
+    ----------
+    positions_m : (N, 2) float
+    parent : (N,) int
+        Parent of each node (the root is its own parent).
+    hop : (N,) bool
+        Whether the edge from the parent is a flight.
+    cost : (N,) float
+        Cumulative cost of reaching each node (the planner's objective, IV.15 for DR-RRT*).
+    branch_cost : (N,) float
+        Cost of the edge from the parent.
+    """
+
+    positions_m: FloatArray
+    parent: IntArray
+    hop: BoolArray
+    cost: FloatArray
+    branch_cost: FloatArray
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlanResult:
+    """What a planner returns.
+
+    Attributes
+    ----------
+    status : PlanStatus
+    path : DriftPath or None
+        The plan (consecutive flights merged); ``None`` if FAILED.
+    flight_energy_wh : float
+        Energy of the flights of the plan (IV.14); ``inf`` if FAILED.
+    direct_flight_wh : float
+        Baseline of the problem.
+    compute_s : float
+        Wall-clock planning time.
+    iterations : int
+        Iterations run (planner-specific).
+    solutions : int
+        Number of goal-reaching paths found (optimality-seeking mode keeps the cheapest).
+    cost : float
+        The planner's own objective of the returned path (IV.15 for the thesis planner).
+    tree : SearchTree or None
+        The search tree, for figures.
+    message : str
+    """
+
+    status: PlanStatus
+    path: DriftPath | None
+    flight_energy_wh: float
+    direct_flight_wh: float
+    compute_s: float
+    iterations: int = 0
+    solutions: int = 0
+    cost: float = float("nan")
+    tree: SearchTree | None = None
+    message: str = ""
+
+    @property
+    def success(self) -> bool:
+        return self.status is PlanStatus.EXACT
+
+    @property
+    def saving(self) -> float:
+        """Fraction of the direct-flight energy saved (negative if the plan flies more)."""
+        if not self.success:
+            return float("nan")
+        return 1.0 - self.flight_energy_wh / self.direct_flight_wh
+
+
+def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
+    """The planning problem a validated scenario file describes."""
+    hdop = None
+    if scenario.hdop_others_m is not None and scenario.hdop_target_m is not None:
+        hdop = HdopTerm(others_m=scenario.hdop_others_m, target_m=scenario.hdop_target_m)
+    return DriftProblem(
+        space=DriftSpace(
+            obstacles=scenario.obstacles, flights_avoid_obstacles=scenario.flights_avoid_obstacles
+        ),
+        propagator=DriftPropagator(field=scenario.current, dt_s=scenario.dt_s, method=scenario.integrator),
+        start_m=scenario.start_m,
+        goal_m=scenario.goal_m,
+        goal_tolerance_m=scenario.goal_tolerance_m,
+        energy=scenario.energy,
+        hdop=hdop,
+        horizon_s=scenario.horizon_s,
+        max_leg_m=scenario.max_leg_m,
+        time_weight_wh_per_h=scenario.time_weight_wh_per_h,
+    )
