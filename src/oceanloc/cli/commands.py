@@ -4,3 +4,5 @@ One import per module; keep them sorted so that merges stay trivial.
 """
 
 from __future__ import annotations
+
+from oceanloc.cli import localize  # noqa: F401
