@@ -5,4 +5,7 @@ One import per module; keep them sorted so that merges stay trivial.
 
 from __future__ import annotations
 
-from oceanloc.cli import localize  # noqa: F401
+from oceanloc.cli import (
+    localize,  # noqa: F401
+    simulate_logs,  # noqa: F401
+)

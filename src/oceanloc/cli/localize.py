@@ -192,3 +192,65 @@ def _print_spread(spread) -> None:
             "yes" if spread.std_enu_m[j] <= tgt else "no",
         )
     console.print(table)
+
+
+@app.command("logs")
+def logs(
+    gps: Annotated[Path, typer.Argument(help="NMEA 0183 GPS log (GGA with RMC or ZDA dates).")],
+    ranges: Annotated[Path, typer.Argument(help="USBL range CSV (utc,beacon,range_m|owtt_s|twtt_s).")],
+    sound_speed: Annotated[float, typer.Option(help="Sound speed for travel-time columns, m/s.")] = 1500.0,
+    sigma_range: Annotated[float, typer.Option(help="Total range sigma (USBL and GPS), m.")] = 1.006,
+    max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate across, s.")] = 2.0,
+    json_path: Annotated[
+        Path | None, typer.Option("--json", help="Write the estimates as JSON here.")
+    ] = None,
+) -> None:
+    """Locate the beacons of a GPS + USBL range log pair (origin: the first GPS fix)."""
+    from oceanloc.estimation.range_logs import localize_beacons
+    from oceanloc.geo.enu import enu_to_geodetic
+    from oceanloc.io.nmea import read_nmea
+    from oceanloc.io.usbl import align_ranges, read_usbl
+
+    gps_log = read_nmea(gps)
+    range_log = read_usbl(ranges, sound_speed_mps=sound_speed)
+    qc = gps_log.qc.merge(range_log.qc)
+    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
+    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap)
+    if aligned.dropped_no_gps:
+        err_console.print(f"{aligned.dropped_no_gps} ranges dropped: no GPS fix within {max_gap} s")
+    estimates = localize_beacons(aligned, sigma_range_m=sigma_range)
+    table = Table(
+        title=f"Beacons (ENU from the first fix {aligned.origin.lat_deg:.6f}, {aligned.origin.lon_deg:.6f})"
+    )
+    for col in ("beacon", "E m", "N m", "U m", "1σ E/N/U m", "lat deg", "lon deg", "used/excl", "RMS m"):
+        table.add_column(col, justify="right")
+    payload = []
+    for e in estimates:
+        geo = enu_to_geodetic(e.position_enu_m, aligned.origin)
+        sig = np.sqrt(np.diag(e.covariance_m2))
+        table.add_row(
+            str(e.beacon),
+            *(f"{v:+.2f}" for v in e.position_enu_m),
+            "/".join(f"{v:.2f}" for v in sig),
+            f"{geo[0]:.7f}",
+            f"{geo[1]:.7f}",
+            f"{int(e.used.sum())}/{e.n_excluded}",
+            f"{e.residual_rms_m:.2f}",
+        )
+        payload.append(
+            {
+                "beacon": e.beacon,
+                "enu_m": e.position_enu_m,
+                "sigma_enu_m": sig,
+                "lat_deg": geo[0],
+                "lon_deg": geo[1],
+                "h_m": geo[2],
+                "ranges_used": int(e.used.sum()),
+                "ranges_excluded": e.n_excluded,
+            }
+        )
+    console.print(table)
+    if json_path is not None:
+        write_json(
+            json_path, {"beacons": payload, "qc": qc.counts(), "dropped_no_gps": aligned.dropped_no_gps}
+        )
