@@ -8,8 +8,10 @@ from __future__ import annotations
 from oceanloc.cli import (  # noqa: F401
     dop,
     drift_plan,
+    localize,
     reproduce_dillard,
     reproduce_dillard_drrt,
     simulate_drift,
+    simulate_logs,
     tdoa,
 )

@@ -1,0 +1,256 @@
+"""``oceanloc localize``: locate transponders from recorded data (GNSS-A ping files, GPS + range logs)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from oceanloc.cli import root
+from oceanloc.cli._common import console, ensure_dir, err_console, write_json
+from oceanloc.errors import ConfigError
+from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa, survey_spread
+from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
+
+app = typer.Typer(help="Locate transponders from recorded field data.", no_args_is_help=True)
+root.app.add_typer(app, name="localize")
+
+ACCEPTANCE_STD_ENU_M = np.array([0.025, 0.035, 0.06])
+"""Target standard deviation across the La Jolla surveys (E, N, U), from the issue's acceptance."""
+
+
+@app.command("gnssa")
+def gnssa(
+    files: Annotated[
+        list[Path] | None,
+        typer.Argument(
+            help="GNSS-A ping files; none: the five packaged La Jolla surveys.", show_default=False
+        ),
+    ] = None,
+    sound_speed: Annotated[
+        list[float] | None,
+        typer.Option(
+            "--sound-speed",
+            help="Sound speed in m/s: one value for all files or one per file (default: the published "
+            "value for known files).",
+        ),
+    ] = None,
+    fixed_sound_speed: Annotated[
+        bool, typer.Option("--fixed-sound-speed", help="Do not estimate the sound speed (use it as given).")
+    ] = False,
+    sigma_sound_speed: Annotated[float, typer.Option(help="Prior 1-sigma of the sound speed, m/s.")] = 3.0,
+    knot_spacing: Annotated[
+        float,
+        typer.Option(help="Sound-speed knot spacing in s (piecewise linear in time); 0: one constant speed."),
+    ] = 900.0,
+    max_tan_incidence: Annotated[
+        float,
+        typer.Option(help="Elevation cut: drop pings farther than this many depths horizontally (0: off)."),
+    ] = 0.0,
+    outlier_threshold: Annotated[float, typer.Option(help="Normalized-residual outlier threshold.")] = 3.0,
+    json_path: Annotated[Path | None, typer.Option("--json", help="Write the results as JSON here.")] = None,
+    figures: Annotated[
+        Path | None, typer.Option("--figures", help="Write residual figures (PNG) in this folder.")
+    ] = None,
+    show_exclusions: Annotated[bool, typer.Option(help="List every excluded ping with its reason.")] = False,
+) -> None:
+    """Robust MAP position of a seafloor transponder from GNSS-Acoustic surveys, and their spread."""
+    paths = list(files) if files else lajolla_paths()
+    if not files:
+        err_console.print(f"no file given: using the {len(paths)} packaged La Jolla surveys")
+    speeds = _speeds(paths, list(sound_speed or []))
+    surveys, results = [], []
+    for path, speed in zip(paths, speeds, strict=True):
+        survey = read_gnssa(path)
+        if survey.qc.issues:
+            err_console.print(survey.qc.summary(max_lines=10), highlight=False)
+        opts = GnssaOptions(
+            sound_speed_mps=speed,
+            estimate_sound_speed=not fixed_sound_speed,
+            sigma_sound_speed_mps=sigma_sound_speed,
+            knot_spacing_s=knot_spacing if knot_spacing > 0 else None,
+            max_tan_incidence=max_tan_incidence if max_tan_incidence > 0 else None,
+            outlier_threshold=outlier_threshold,
+        )
+        surveys.append(survey)
+        results.append(localize_gnssa(survey, opts))
+    _print_results(results)
+    if show_exclusions:
+        for r in results:
+            for e in r.exclusions:
+                console.print(f"{r.name}: {e}", highlight=False)
+    spread = survey_spread(results) if len(results) >= 2 else None
+    if spread is not None:
+        _print_spread(spread)
+    if figures is not None:
+        from oceanloc.report.field_figures import gnssa_residual_figure, gnssa_spread_figure
+
+        ensure_dir(figures)
+        for s, r in zip(surveys, results, strict=True):
+            gnssa_residual_figure(s, r, figures / f"{s.name}_residuals.png")
+        if len(results) >= 2:
+            gnssa_spread_figure(results, figures / "gnssa_spread.png")
+        err_console.print(f"wrote figures to {figures}")
+    if json_path is not None:
+        write_json(json_path, gnssa_json(results))
+
+
+def gnssa_json(results: list[GnssaResult]) -> dict:
+    """The ``--json`` payload: one entry per survey and the spread across them."""
+    surveys = []
+    for r in results:
+        e, n, u = r.position_enu_m
+        se, sn, su = r.sigma_enu_m
+        surveys.append(
+            {
+                "file": r.name,
+                "n_m": n,
+                "e_m": e,
+                "u_m": u,
+                "sigma_n_m": sn,
+                "sigma_e_m": se,
+                "sigma_u_m": su,
+                "sound_speed_mps": r.sound_speed_mps,
+                "pings_used": r.pings_used,
+                "pings_excluded": len(r.exclusions),
+                "residual_rms_m": r.residual_rms_m,
+            }
+        )
+    payload: dict = {"surveys": surveys}
+    if len(results) >= 2:
+        s = survey_spread(results)
+        payload["spread"] = {"std_n_m": s.std_enu_m[1], "std_e_m": s.std_enu_m[0], "std_u_m": s.std_enu_m[2]}
+    else:
+        payload["spread"] = {"std_n_m": None, "std_e_m": None, "std_u_m": None}
+    return payload
+
+
+def _speeds(paths: list[Path], given: list[float]) -> list[float]:
+    if len(given) == 1:
+        return given * len(paths)
+    if given and len(given) != len(paths):
+        raise ConfigError(f"--sound-speed: give one value or one per file ({len(paths)}), got {len(given)}")
+    if given:
+        return given
+    out = []
+    for p in paths:
+        c = published_sound_speed_mps(p)
+        if c is None:
+            raise ConfigError(f"{p}: no published sound speed for this file; give --sound-speed")
+        out.append(c)
+    return out
+
+
+def _print_results(results: list[GnssaResult]) -> None:
+    table = Table(title="GNSS-A transponder positions (file frame)")
+    for col in ("survey", "N m", "E m", "U m", "1σ N/E/U cm", "c m/s", "used/excl", "RMS cm"):
+        table.add_column(col, justify="right")
+    geo_table = Table(title="As latitude, longitude, ellipsoidal height (WGS84)")
+    for col in ("survey", "latitude deg", "longitude deg", "height m"):
+        geo_table.add_column(col, justify="right")
+    for r in results:
+        e, n, u = r.position_enu_m
+        se, sn, su = 100.0 * r.sigma_enu_m
+        name = r.name.removeprefix("gnssa_data_")
+        table.add_row(
+            name,
+            f"{n:+.3f}",
+            f"{e:+.3f}",
+            f"{u:+.3f}",
+            f"{sn:.1f}/{se:.1f}/{su:.1f}",
+            f"{r.sound_speed_mps:.1f}",
+            f"{r.pings_used}/{len(r.exclusions)}",
+            f"{100 * r.residual_rms_m:.1f}",
+        )
+        if r.position_geodetic is not None:
+            lat, lon, h = r.position_geodetic
+            geo_table.add_row(name, f"{lat:.8f}", f"{lon:.8f}", f"{h:.3f}")
+    console.print(table)
+    if geo_table.row_count:
+        console.print(geo_table)
+
+
+def _print_spread(spread) -> None:
+    table = Table(title=f"Spread across {spread.n_surveys} surveys")
+    for col in ("axis", "std cm", "RMS σ cm", "chi2", "95% range", "σ explain", "target", "met"):
+        table.add_column(col, justify="right")
+    lo, hi = spread.chi2_bounds
+    ok = spread.sigmas_explain_spread
+    for k, (axis, tgt) in enumerate(zip(("N", "E", "U"), ACCEPTANCE_STD_ENU_M[[1, 0, 2]], strict=True)):
+        j = (1, 0, 2)[k]
+        table.add_row(
+            axis,
+            f"{100 * spread.std_enu_m[j]:.1f}",
+            f"{100 * spread.rms_sigma_enu_m[j]:.1f}",
+            f"{spread.chi2_enu[j]:.1f}",
+            f"{lo:.1f}-{hi:.1f}",
+            "yes" if ok[j] else "no",
+            f"{100 * tgt:.1f}",
+            "yes" if spread.std_enu_m[j] <= tgt else "no",
+        )
+    console.print(table)
+
+
+@app.command("logs")
+def logs(
+    gps: Annotated[Path, typer.Argument(help="NMEA 0183 GPS log (GGA with RMC or ZDA dates).")],
+    ranges: Annotated[Path, typer.Argument(help="USBL range CSV (utc,beacon,range_m|owtt_s|twtt_s).")],
+    sound_speed: Annotated[float, typer.Option(help="Sound speed for travel-time columns, m/s.")] = 1500.0,
+    sigma_range: Annotated[float, typer.Option(help="Total range sigma (USBL and GPS), m.")] = 1.006,
+    max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate across, s.")] = 2.0,
+    json_path: Annotated[
+        Path | None, typer.Option("--json", help="Write the estimates as JSON here.")
+    ] = None,
+) -> None:
+    """Locate the beacons of a GPS + USBL range log pair (origin: the first GPS fix)."""
+    from oceanloc.estimation.range_logs import localize_beacons
+    from oceanloc.geo.enu import enu_to_geodetic
+    from oceanloc.io.nmea import read_nmea
+    from oceanloc.io.usbl import align_ranges, read_usbl
+
+    gps_log = read_nmea(gps)
+    range_log = read_usbl(ranges, sound_speed_mps=sound_speed)
+    qc = gps_log.qc.merge(range_log.qc)
+    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
+    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap)
+    if aligned.dropped_no_gps:
+        err_console.print(f"{aligned.dropped_no_gps} ranges dropped: no GPS fix within {max_gap} s")
+    estimates = localize_beacons(aligned, sigma_range_m=sigma_range)
+    table = Table(
+        title=f"Beacons (ENU from the first fix {aligned.origin.lat_deg:.6f}, {aligned.origin.lon_deg:.6f})"
+    )
+    for col in ("beacon", "E m", "N m", "U m", "1σ E/N/U m", "lat deg", "lon deg", "used/excl", "RMS m"):
+        table.add_column(col, justify="right")
+    payload = []
+    for e in estimates:
+        geo = enu_to_geodetic(e.position_enu_m, aligned.origin)
+        sig = np.sqrt(np.diag(e.covariance_m2))
+        table.add_row(
+            str(e.beacon),
+            *(f"{v:+.2f}" for v in e.position_enu_m),
+            "/".join(f"{v:.2f}" for v in sig),
+            f"{geo[0]:.7f}",
+            f"{geo[1]:.7f}",
+            f"{int(e.used.sum())}/{e.n_excluded}",
+            f"{e.residual_rms_m:.2f}",
+        )
+        payload.append(
+            {
+                "beacon": e.beacon,
+                "enu_m": e.position_enu_m,
+                "sigma_enu_m": sig,
+                "lat_deg": geo[0],
+                "lon_deg": geo[1],
+                "h_m": geo[2],
+                "ranges_used": int(e.used.sum()),
+                "ranges_excluded": e.n_excluded,
+            }
+        )
+    console.print(table)
+    if json_path is not None:
+        write_json(
+            json_path, {"beacons": payload, "qc": qc.counts(), "dropped_no_gps": aligned.dropped_no_gps}
+        )

@@ -1,0 +1,1 @@
+"""Small real data sets shipped with oceanloc (each folder holds its licence and a README)."""

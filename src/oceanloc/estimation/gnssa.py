@@ -1,0 +1,525 @@
+"""Robust MAP localization of a seafloor transponder from GNSS-Acoustic two-way travel times.
+
+Model (per ping ``i``, transmit position ``a_i``, receive position ``b_i``, both from GNSS)::
+
+    TWTT_i = (|p_T - a_i| + |p_T - b_i|) / c(t_i) + tau + noise
+
+with the transponder ``p_T = (E, N, U)`` and the sound speed as unknowns of one MAP problem solved by
+:func:`oceanloc.estimation.map_gauss_newton.solve_map` (Garcia et al. 2019, eqs. 10-22, on a different
+measurement model). The sound speed is a harmonic-mean speed along the path, either one constant or
+piecewise linear in time (knots every ``knot_spacing_s``): sea water warms and mixes over a survey of
+two hours, and on the La Jolla surveys one constant speed leaves residuals that drift by +-10 cm with
+time. Knot values have a Gaussian prior centred on the given (published) speed with standard deviation
+``sigma_sound_speed_mps`` and exponential correlation ``sound_speed_correlation_s`` between knots.
+
+Noise (journal eqs. 46-52 generalized): the GNSS sigmas of both legs projected on their lines of sight
+(known, per ping), plus a path term ``sigma_path`` (timing noise, unmodelled propagation) and, for far
+pings, a range-dependent term ``beta * tan(incidence)``; ``sigma_path`` and ``beta`` are estimated from
+the residuals by maximum likelihood (variance components), so the formal covariance matches the
+scatter of the residuals instead of trusting a guessed timing sigma.
+
+Far pings: a straight ray at constant speed is wrong by an amount that grows with the incidence angle
+(ray bending through the sound-speed profile), so the range-dependent term down-weights far pings by
+what the data say their extra scatter is; an elevation cut (``max_tan_incidence``) is available too.
+
+Outliers: the authors' rule (Xie et al. 2023): the ping with the largest normalized residual is removed
+if it exceeds ``outlier_threshold`` (3), one at a time, re-solving and re-estimating the noise after each
+removal. Every exclusion is listed with its reason.
+
+Uncertainty: residuals of neighbouring pings are correlated (the sound speed field changes slowly), so
+the formal covariance is optimistic. A delete-one-block jackknife over ``jackknife_blocks`` contiguous
+time blocks (one batched solve) measures the estimate's sensitivity to whole stretches of the survey;
+the reported covariance is the formal one plus the positive part of (jackknife - formal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from oceanloc._typing import BoolArray, FloatArray, IntArray
+from oceanloc.errors import ConfigError, DataError
+from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
+from oceanloc.geo.enu import enu_to_geodetic
+from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.models.measurements import (
+    range_jacobian,
+    two_way_range_jacobian,
+    two_way_range_m,
+)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaOptions:
+    """Settings of :func:`localize_gnssa`.
+
+    Attributes
+    ----------
+    sound_speed_mps : float
+        Prior (or fixed) harmonic-mean sound speed, m/s.
+    estimate_sound_speed : bool
+        Make the sound speed an unknown with a prior; False fixes it.
+    sigma_sound_speed_mps : float
+        Prior standard deviation of each sound-speed knot, m/s.
+    knot_spacing_s : float or None
+        Spacing of the piecewise-linear sound-speed knots in time; None for one constant speed.
+    min_pings_per_knot : int
+        Knots are spread further apart if a segment would hold fewer pings than this.
+    sound_speed_correlation_s : float
+        Correlation time of the knot prior (exponential), seconds.
+    outlier_threshold : float
+        Normalized-residual threshold of the one-at-a-time outlier rule.
+    max_outlier_fraction : float
+        At most this fraction of the pings is excluded as outliers.
+    gross_error_m : float
+        Exclusions with a residual larger than this are labelled gross errors (same rule, clearer label).
+    range_dependent_weights : bool
+        Estimate the far-ping term ``beta * tan(incidence)`` of the noise.
+    max_tan_incidence : float or None
+        Elevation cut: exclude pings whose horizontal offset exceeds this multiple of the depth.
+    sigma_position_prior_m : float
+        Standard deviation of the (weak) position prior around the initial guess, metres.
+    turnaround_s : float
+        Turn-around delay still in the TWTT (0 for files that removed it), seconds.
+    jackknife_blocks : int
+        Number of contiguous time blocks for the jackknife covariance (0 disables it).
+    """
+
+    sound_speed_mps: float
+    estimate_sound_speed: bool = True
+    sigma_sound_speed_mps: float = 3.0
+    knot_spacing_s: float | None = 900.0
+    min_pings_per_knot: int = 40
+    sound_speed_correlation_s: float = 1800.0
+    outlier_threshold: float = 3.0
+    max_outlier_fraction: float = 0.2
+    gross_error_m: float = 5.0
+    range_dependent_weights: bool = True
+    max_tan_incidence: float | None = None
+    sigma_position_prior_m: float = 1000.0
+    turnaround_s: float = 0.0
+    jackknife_blocks: int = 10
+
+    def __post_init__(self) -> None:
+        if not (1300.0 <= self.sound_speed_mps <= 1700.0):
+            raise ConfigError(f"sound speed {self.sound_speed_mps} m/s is outside [1300, 1700]")
+        if self.sigma_sound_speed_mps <= 0.0:
+            raise ConfigError("sigma_sound_speed_mps must be positive")
+        if self.knot_spacing_s is not None and self.knot_spacing_s <= 0.0:
+            raise ConfigError("knot_spacing_s must be positive (or None for a constant sound speed)")
+        if self.outlier_threshold <= 1.0:
+            raise ConfigError(f"outlier_threshold must exceed 1, got {self.outlier_threshold}")
+        if not 0.0 <= self.max_outlier_fraction < 0.5:
+            raise ConfigError("max_outlier_fraction must be in [0, 0.5)")
+        if self.max_tan_incidence is not None and self.max_tan_incidence <= 0.0:
+            raise ConfigError("max_tan_incidence must be positive")
+        if self.jackknife_blocks == 1 or self.jackknife_blocks < 0:
+            raise ConfigError("jackknife_blocks must be 0 (off) or at least 2")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Exclusion:
+    """One excluded ping and why."""
+
+    index: int
+    line: int
+    time_s: float
+    reason: str
+    residual_m: float
+
+    def __str__(self) -> str:
+        return f"line {self.line} (t={self.time_s:.1f} s): {self.reason}"
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaResult:
+    """Localization of one survey.
+
+    Attributes
+    ----------
+    name : str
+        Survey name.
+    position_enu_m : (3,) float
+        Transponder (E, N, U) in the file's frame, metres.
+    covariance_m2 : (3, 3) float
+        Reported covariance: formal plus the positive part of (jackknife - formal).
+    covariance_formal_m2 : (3, 3) float
+        MAP covariance (eq. 22) with the estimated noise.
+    covariance_jackknife_m2 : (3, 3) float or None
+        Delete-one-block jackknife covariance.
+    position_geodetic : (3,) float or None
+        Latitude (deg), longitude (deg), ellipsoidal height (m) if the file has an origin.
+    knot_times_s : (K,) float
+        Times of the sound-speed knots (empty if the sound speed is fixed).
+    sound_speed_knots_mps : (K,) float
+        Estimated sound speed at the knots.
+    sound_speed_mps : float
+        Mean sound speed over the used pings.
+    used : (n,) bool
+        Pings used in the final solution.
+    exclusions : tuple of Exclusion
+        Every excluded ping, in the order it was excluded.
+    residual_m : (n,) float
+        ``c(t) TWTT - (|p - a| + |p - b|)`` for every ping at the estimate, metres (two-way path).
+    sigma_m : (n,) float
+        Per-ping standard deviation of that residual, metres.
+    residual_rms_m : float
+        RMS of the used residuals, metres.
+    sigma_path_m : float
+        Estimated path noise (timing and unmodelled propagation), metres of two-way path.
+    beta_m : float
+        Estimated far-ping noise per unit tan(incidence), metres.
+    converged : bool
+    """
+
+    name: str
+    position_enu_m: FloatArray
+    covariance_m2: FloatArray
+    covariance_formal_m2: FloatArray
+    covariance_jackknife_m2: FloatArray | None
+    position_geodetic: FloatArray | None
+    knot_times_s: FloatArray
+    sound_speed_knots_mps: FloatArray
+    sound_speed_mps: float
+    used: BoolArray
+    exclusions: tuple[Exclusion, ...]
+    residual_m: FloatArray
+    sigma_m: FloatArray
+    residual_rms_m: float
+    sigma_path_m: float
+    beta_m: float
+    converged: bool
+
+    @property
+    def sigma_enu_m(self) -> FloatArray:
+        """1-sigma of (E, N, U) from :attr:`covariance_m2`, metres."""
+        return np.sqrt(np.diag(self.covariance_m2))
+
+    @property
+    def pings_used(self) -> int:
+        return int(self.used.sum())
+
+
+@dataclass(frozen=True, slots=True)
+class GnssaProblem:
+    """A batch of GNSS-A MAP problems sharing the pings, differing in which pings they use.
+
+    State ``x = (E, N, U, c_1, ..., c_K)``; with ``K = 0`` the sound speed is fixed at ``fixed_speed``.
+    Residuals are in travel time, whitened by ``sigma_m / c0`` with the nominal speed ``c0`` (a constant
+    weight, so the cost is an ordinary weighted least-squares cost in travel time).
+
+    Attributes
+    ----------
+    transmit_m, receive_m : (n, 3) float
+    twtt_s : (n,) float
+        Travel times with the turn-around delay removed.
+    basis : (n, K) float
+        Sound-speed interpolation weights of each ping (rows sum to 1).
+    sigma_m : (n,) float
+        Path-length standard deviations, metres.
+    mask : (B, n) bool
+    fixed_speed : float
+        The nominal (prior) speed: the fixed speed when ``K = 0`` and the whitening speed ``c0``.
+    """
+
+    transmit_m: FloatArray
+    receive_m: FloatArray
+    twtt_s: FloatArray
+    basis: FloatArray
+    sigma_m: FloatArray
+    mask: BoolArray
+    fixed_speed: float
+
+    @property
+    def batch_size(self) -> int:
+        return int(self.mask.shape[0])
+
+    def speed(self, x: FloatArray) -> FloatArray:
+        """Sound speed at each ping, ``(b, n)``."""
+        if self.basis.shape[1] == 0:
+            return np.full((x.shape[0], self.twtt_s.shape[0]), self.fixed_speed)
+        return x[:, 3:] @ self.basis.T
+
+    def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
+        target = x[:, None, :3]
+        path = two_way_range_m(target, self.transmit_m, self.receive_m)
+        c = self.speed(x)
+        weight = np.where(self.mask[rows], self.fixed_speed / self.sigma_m, 0.0)
+        resid = (self.twtt_s - path / c) * weight
+        d_pos = two_way_range_jacobian(target, self.transmit_m, self.receive_m) / c[..., None]
+        jac = np.empty((x.shape[0], self.twtt_s.shape[0], x.shape[1]))
+        jac[..., :3] = d_pos
+        if x.shape[1] > 3:
+            jac[..., 3:] = (-path / (c * c))[..., None] * self.basis
+        return resid, jac * weight[..., None]
+
+
+def sound_speed_knots(t_s: FloatArray, options: GnssaOptions) -> FloatArray:
+    """Knot times of the piecewise-linear sound speed: at least ``min_pings_per_knot`` pings per
+    segment on average and at most ``knot_spacing_s`` apart (one knot: a constant speed)."""
+    if not options.estimate_sound_speed:
+        return np.zeros(0)
+    t0, t1 = float(t_s.min()), float(t_s.max())
+    if options.knot_spacing_s is None or t1 <= t0:
+        return np.array([t0])
+    spacing = max(options.knot_spacing_s, (t1 - t0) * options.min_pings_per_knot / t_s.size)
+    n_seg = max(1, round((t1 - t0) / spacing))
+    return np.linspace(t0, t1, n_seg + 1)
+
+
+def hat_basis(t_s: FloatArray, knots_s: FloatArray) -> FloatArray:
+    """Piecewise-linear interpolation weights ``(n, K)`` of times on knots (constant for one knot)."""
+    if knots_s.size == 0:
+        return np.zeros((t_s.size, 0))
+    if knots_s.size == 1:
+        return np.ones((t_s.size, 1))
+    eye = np.eye(knots_s.size)
+    return np.stack([np.interp(t_s, knots_s, eye[k]) for k in range(knots_s.size)], axis=1)
+
+
+def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
+    """Robust MAP position of the transponder of one survey (see the module docstring).
+
+    Parameters
+    ----------
+    survey : GnssaSurvey
+    options : GnssaOptions
+
+    Returns
+    -------
+    GnssaResult
+    """
+    n = survey.n_pings
+    tx, rx = survey.transmit_enu_m, survey.receive_enu_m
+    twtt = survey.twtt_s - options.turnaround_s
+    if np.any(twtt <= 0.0):
+        raise DataError(f"{survey.path}: turnaround {options.turnaround_s} s exceeds some travel times")
+    t_mid = 0.5 * (survey.t_transmit_s + survey.t_receive_s)
+    knots = sound_speed_knots(t_mid, options)
+    basis = hat_basis(t_mid, knots)
+    n_knots = knots.size
+    dim = 3 + n_knots
+
+    x0 = _initial_guess(tx, twtt, options.sound_speed_mps)
+    prior_mean = np.concatenate([x0, np.full(n_knots, options.sound_speed_mps)])[None, :]
+    prior_cov = np.zeros((dim, dim))
+    prior_cov[:3, :3] = np.eye(3) * options.sigma_position_prior_m**2
+    if n_knots:
+        lag = np.abs(knots[:, None] - knots[None, :])
+        prior_cov[3:, 3:] = options.sigma_sound_speed_mps**2 * np.exp(
+            -lag / options.sound_speed_correlation_s
+        )
+    prior = GaussianPrior(mean=prior_mean, cov=prior_cov)
+    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
+    map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface)
+
+    candidates = np.ones(n, dtype=bool)
+    exclusions: list[Exclusion] = []
+    if options.max_tan_incidence is not None:
+        depth = np.maximum(tx[:, 2] - x0[2], 1.0)
+        tan_inc = np.hypot(tx[:, 0] - x0[0], tx[:, 1] - x0[1]) / depth
+        for i in np.flatnonzero(tan_inc > options.max_tan_incidence):
+            candidates[i] = False
+            exclusions.append(
+                Exclusion(
+                    index=int(i),
+                    line=int(survey.line[i]),
+                    time_s=float(survey.t_transmit_s[i]),
+                    reason=f"far ping: tan(incidence) {tan_inc[i]:.2f} > {options.max_tan_incidence}",
+                    residual_m=float("nan"),
+                )
+            )
+    if candidates.sum() < dim + 2:
+        raise DataError(f"{survey.path}: {int(candidates.sum())} usable pings, need at least {dim + 2}")
+
+    sigma_path, beta = 0.05, 0.0
+    used = candidates.copy()
+    x = prior_mean.copy()
+    max_out = int(options.max_outlier_fraction * candidates.sum())
+    n_out = 0
+    while True:
+        gnss_var, tan_inc = _gnss_variance(x[0, :3], survey)
+        result = None
+        for _ in range(3):
+            sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * tan_inc) ** 2)
+            problem = GnssaProblem(tx, rx, twtt, basis, sigma, used[None, :], options.sound_speed_mps)
+            result = solve_map(problem, prior, map_opts, initial=x)
+            x = result.estimate
+            resid = _path_residual(problem, x)[0]
+            sigma_path, beta = _variance_components(
+                resid[used], gnss_var[used], tan_inc[used], options.range_dependent_weights
+            )
+        assert result is not None
+        sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * tan_inc) ** 2)
+        normalized = np.where(used, np.abs(resid) / sigma, 0.0)
+        worst = int(np.argmax(normalized))
+        if normalized[worst] <= options.outlier_threshold or n_out >= max_out:
+            break
+        used[worst] = False
+        n_out += 1
+        exclusions.append(
+            Exclusion(
+                index=worst,
+                line=int(survey.line[worst]),
+                time_s=float(survey.t_transmit_s[worst]),
+                reason=("gross error" if abs(resid[worst]) > options.gross_error_m else "outlier")
+                + f": |residual| {abs(resid[worst]):.3f} m = {normalized[worst]:.1f} sigma"
+                f" > {options.outlier_threshold:g} sigma",
+                residual_m=float(resid[worst]),
+            )
+        )
+
+    problem = GnssaProblem(tx, rx, twtt, basis, sigma, used[None, :], options.sound_speed_mps)
+    cov_formal = result.covariance[0, :3, :3]
+    cov_jk = _jackknife(problem, prior, map_opts, x, t_mid, used, options.jackknife_blocks)
+    cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
+    resid = _path_residual(problem, x)[0]
+    speed = problem.speed(x)[0]
+    geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
+    return GnssaResult(
+        name=survey.name,
+        position_enu_m=x[0, :3].copy(),
+        covariance_m2=cov,
+        covariance_formal_m2=cov_formal,
+        covariance_jackknife_m2=cov_jk,
+        position_geodetic=geodetic,
+        knot_times_s=knots,
+        sound_speed_knots_mps=x[0, 3:].copy(),
+        sound_speed_mps=float(np.mean(speed[used])),
+        used=used,
+        exclusions=tuple(exclusions),
+        residual_m=resid,
+        sigma_m=sigma,
+        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
+        sigma_path_m=float(sigma_path),
+        beta_m=float(beta),
+        converged=bool(result.converged[0]),
+    )
+
+
+def _initial_guess(tx: FloatArray, twtt: FloatArray, speed: float) -> FloatArray:
+    """Below the ping with the shortest travel time, at half its two-way path."""
+    i = int(np.argmin(twtt))
+    return np.array([tx[i, 0], tx[i, 1], tx[i, 2] - 0.5 * speed * twtt[i]])
+
+
+def _gnss_variance(target: FloatArray, survey: GnssaSurvey) -> tuple[FloatArray, FloatArray]:
+    """GNSS variance projected on both legs (eqs. 46-52) and tan(incidence) of each ping."""
+    u_tx = range_jacobian(target, survey.transmit_enu_m)
+    u_rx = range_jacobian(target, survey.receive_enu_m)
+    var = np.sum((u_tx * survey.sigma_transmit_enu_m) ** 2, axis=-1)
+    var += np.sum((u_rx * survey.sigma_receive_enu_m) ** 2, axis=-1)
+    horiz = np.hypot(survey.transmit_enu_m[:, 0] - target[0], survey.transmit_enu_m[:, 1] - target[1])
+    depth = np.maximum(survey.transmit_enu_m[:, 2] - target[2], 1e-3)
+    return var, horiz / depth
+
+
+def _path_residual(problem: GnssaProblem, x: FloatArray) -> FloatArray:
+    """``c(t) TWTT - path`` in metres, ``(b, n)``."""
+    path = two_way_range_m(x[:, None, :3], problem.transmit_m, problem.receive_m)
+    return problem.speed(x) * problem.twtt_s - path
+
+
+def _variance_components(
+    resid: FloatArray, gnss_var: FloatArray, tan_inc: FloatArray, with_beta: bool
+) -> tuple[float, float]:
+    """Maximum-likelihood ``sigma_path`` and ``beta`` of ``var_i = g_i + s^2 + beta^2 tan_i^2``."""
+    e2 = resid * resid
+    t2 = tan_inc * tan_inc
+
+    def nll(q: FloatArray) -> float:
+        var = gnss_var + np.exp(2.0 * q[0]) + (np.exp(2.0 * q[1]) * t2 if with_beta else 0.0)
+        return float(np.sum(np.log(var) + e2 / var))
+
+    start = np.log([max(np.sqrt(np.mean(e2)), 1e-3), 1e-2])
+    q = minimize(nll, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-6}).x
+    return float(max(np.exp(q[0]), 1e-4)), float(np.exp(q[1])) if with_beta else 0.0
+
+
+def _jackknife(
+    problem: GnssaProblem,
+    prior: GaussianPrior,
+    map_opts: MapOptions,
+    x: FloatArray,
+    t_s: FloatArray,
+    used: BoolArray,
+    blocks: int,
+) -> FloatArray | None:
+    """Delete-one-block jackknife covariance of the position over contiguous time blocks."""
+    idx = np.flatnonzero(used)
+    if blocks < 2 or idx.size < 4 * blocks:
+        return None
+    order = idx[np.argsort(t_s[idx], kind="stable")]
+    block_of = np.empty(problem.twtt_s.size, dtype=np.int64)
+    block_of[order] = np.arange(order.size) * blocks // order.size
+    masks = np.stack([used & (block_of != g) for g in range(blocks)])
+    batch = GnssaProblem(
+        problem.transmit_m,
+        problem.receive_m,
+        problem.twtt_s,
+        problem.basis,
+        problem.sigma_m,
+        masks,
+        problem.fixed_speed,
+    )
+    rep_prior = GaussianPrior(mean=np.repeat(prior.mean, blocks, axis=0), cov=prior.cov)
+    reps = solve_map(batch, rep_prior, map_opts, initial=np.repeat(x, blocks, axis=0)).estimate[:, :3]
+    dev = reps - reps.mean(axis=0)
+    return (blocks - 1) / blocks * dev.T @ dev
+
+
+def _positive_part(matrix: FloatArray) -> FloatArray:
+    """The positive semi-definite part of a symmetric matrix."""
+    w, v = np.linalg.eigh(0.5 * (matrix + matrix.T))
+    return (v * np.maximum(w, 0.0)) @ v.T
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SurveySpread:
+    """Agreement of repeated surveys of one transponder.
+
+    Attributes
+    ----------
+    std_enu_m : (3,) float
+        Sample standard deviation (ddof=1) of the positions across surveys, metres.
+    rms_sigma_enu_m : (3,) float
+        RMS of the surveys' reported 1-sigma, metres: what the sigmas predict for that spread.
+    chi2_enu : (3,) float
+        ``sum_i (x_i - mean)^2 / sigma_i^2`` per axis, chi-square with ``m - 1`` degrees of freedom if
+        the sigmas are right.
+    chi2_bounds : (2,) float
+        Central 95% interval of that chi-square.
+    n_surveys : int
+    """
+
+    std_enu_m: FloatArray
+    rms_sigma_enu_m: FloatArray
+    chi2_enu: FloatArray
+    chi2_bounds: FloatArray
+    n_surveys: int
+
+    @property
+    def sigmas_explain_spread(self) -> BoolArray:
+        """Per axis: the chi-square lies inside its 95% interval."""
+        return (self.chi2_enu >= self.chi2_bounds[0]) & (self.chi2_enu <= self.chi2_bounds[1])
+
+
+def survey_spread(results: list[GnssaResult]) -> SurveySpread:
+    """Spread across surveys and whether the reported sigmas explain it (needs two or more surveys)."""
+    from scipy.stats import chi2
+
+    if len(results) < 2:
+        raise ConfigError("the spread across surveys needs at least two surveys")
+    pos = np.array([r.position_enu_m for r in results])
+    sig = np.array([r.sigma_enu_m for r in results])
+    dev = pos - pos.mean(axis=0)
+    dof = len(results) - 1
+    return SurveySpread(
+        std_enu_m=pos.std(axis=0, ddof=1),
+        rms_sigma_enu_m=np.sqrt(np.mean(sig * sig, axis=0)),
+        chi2_enu=np.sum(dev * dev / (sig * sig), axis=0),
+        chi2_bounds=np.array([chi2.ppf(0.025, dof), chi2.ppf(0.975, dof)]),
+        n_surveys=len(results),
+    )

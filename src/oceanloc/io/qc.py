@@ -1,0 +1,146 @@
+"""Quality control of log files: every skipped line is named (file, line, reason) and counted.
+
+Field logs contain what field logs contain: corrupt sentences, truncated lines, a NaN, a range of
+minus one metre, a clock stepping backwards, a beacon nobody configured, an empty file, a file saved in
+the wrong encoding. Readers skip such lines, record each in a :class:`QcReport` and keep every valid
+line; nothing crashes and nothing valid is lost. :func:`read_lines` is the shared entry point that
+turns raw bytes into numbered text lines, recording lines that are not valid text.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from oceanloc.errors import DataError
+
+REASONS: tuple[str, ...] = (
+    "bad checksum",
+    "truncated sentence",
+    "non-numeric field",
+    "NaN or infinite value",
+    "negative or absurd range",
+    "time going backwards",
+    "unknown beacon id",
+    "empty file",
+    "wrong encoding",
+    "unsupported sentence",
+    "wrong field count",
+    "invalid fix",
+    "duplicate record",
+    "gross outlier",
+)
+"""Reasons a reader may give; free text is allowed, these are the ones the readers use."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class QcIssue:
+    """One skipped line.
+
+    Attributes
+    ----------
+    file : str
+        File name as given to the reader.
+    line : int
+        1-based line number (0 for a whole-file issue such as an empty file).
+    reason : str
+        Short reason, one of :data:`REASONS` where it applies.
+    detail : str
+        What exactly was wrong (the field, the value), for the human reading the summary.
+    """
+
+    file: str
+    line: int
+    reason: str
+    detail: str = ""
+
+    def __str__(self) -> str:
+        where = f"{self.file}:{self.line}" if self.line else self.file
+        return f"{where}: {self.reason}" + (f" ({self.detail})" if self.detail else "")
+
+
+@dataclass(slots=True)
+class QcReport:
+    """Accumulates the issues of one or more files and the number of lines read and kept."""
+
+    issues: list[QcIssue] = field(default_factory=list)
+    lines_read: int = 0
+    records_kept: int = 0
+
+    def add(self, file: str | Path, line: int, reason: str, detail: str = "") -> None:
+        """Record one skipped line."""
+        self.issues.append(QcIssue(file=str(file), line=line, reason=reason, detail=detail))
+
+    def counts(self) -> dict[str, int]:
+        """Number of skipped lines per reason."""
+        return dict(Counter(i.reason for i in self.issues))
+
+    def counts_by_file(self) -> dict[str, dict[str, int]]:
+        """Number of skipped lines per file and reason."""
+        out: dict[str, Counter[str]] = {}
+        for i in self.issues:
+            out.setdefault(i.file, Counter())[i.reason] += 1
+        return {f: dict(c) for f, c in out.items()}
+
+    def merge(self, other: QcReport) -> QcReport:
+        """A new report holding both reports' issues and counts."""
+        return QcReport(
+            issues=[*self.issues, *other.issues],
+            lines_read=self.lines_read + other.lines_read,
+            records_kept=self.records_kept + other.records_kept,
+        )
+
+    def summary(self, max_lines: int = 20) -> str:
+        """Human-readable summary: counts per reason, then the first ``max_lines`` issues."""
+        head = f"{self.records_kept} records kept, {len(self.issues)} lines skipped of {self.lines_read}"
+        if not self.issues:
+            return head
+        parts = [
+            head,
+            "skipped by reason: " + ", ".join(f"{k}: {v}" for k, v in sorted(self.counts().items())),
+        ]
+        parts += [f"  {i}" for i in self.issues[:max_lines]]
+        if len(self.issues) > max_lines:
+            parts.append(f"  ... and {len(self.issues) - max_lines} more")
+        return "\n".join(parts)
+
+
+def read_lines(path: str | Path, qc: QcReport) -> Iterator[tuple[int, str]]:
+    """Yield ``(line_number, text)`` for each non-blank line of a text file.
+
+    The file is read as bytes and decoded line by line as UTF-8 (ASCII logs are UTF-8); a line that is
+    not valid UTF-8 or holds NUL bytes is recorded as ``wrong encoding`` and skipped. A UTF-16 file
+    (byte-order mark) is decoded as such. An empty file is recorded as ``empty file``. A missing or
+    unreadable file is a :class:`DataError`: there is nothing to salvage.
+    """
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise DataError(f"{p}: file not found") from None
+    except OSError as exc:
+        raise DataError(f"{p}: cannot read ({exc})") from None
+    if not raw.strip():
+        qc.add(p, 0, "empty file")
+        return
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        try:
+            raw = raw.decode("utf-16").encode("utf-8")
+        except UnicodeDecodeError:
+            qc.add(p, 0, "wrong encoding", "UTF-16 byte-order mark but undecodable content")
+            return
+    for number, line in enumerate(raw.splitlines(), start=1):
+        if not line.strip():
+            continue
+        qc.lines_read += 1
+        if b"\x00" in line:
+            qc.add(p, number, "wrong encoding", "NUL bytes")
+            continue
+        try:
+            text = line.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            qc.add(p, number, "wrong encoding", f"not UTF-8 at byte {exc.start}")
+            continue
+        yield number, text.strip().lstrip("\ufeff")

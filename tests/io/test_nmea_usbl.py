@@ -1,0 +1,129 @@
+import datetime as dt
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from oceanloc.errors import DataError
+from oceanloc.io.nmea import format_gga, format_zda, read_nmea
+from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import align_ranges, read_usbl
+
+T0 = dt.datetime(2018, 1, 4, 18, 0, tzinfo=dt.UTC)
+ZDA = format_zda(T0)
+GGA = [format_gga(T0 + dt.timedelta(seconds=k), 32.705 + 1e-5 * k, -117.236, -1.478) for k in range(5)]
+FUZZ = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+
+
+def test_nmea_fixes_dates_and_every_bad_line_named(tmp_path: Path):
+    lines = [
+        ZDA,
+        GGA[0],
+        GGA[1][:-2] + "FF",
+        GGA[1][:20],
+        "$GPGGA,180002.00,32xx.3,N,11714.16,W,2,9,0.9,0,M,0,M,,",
+        GGA[2],
+        GGA[1],
+        GGA[3],
+        "$GPXXX,1,2*00",
+    ]
+    path = tmp_path / "gps.nmea"
+    path.write_text("\n".join(lines) + "\n")
+    log = read_nmea(path)
+    assert log.n_fixes == 3
+    np.testing.assert_allclose(log.t_unix_s - T0.timestamp(), [0.0, 2.0, 3.0])
+    np.testing.assert_allclose(log.lat_deg[0], 32.705, atol=1e-7)
+    got = {(i.line, i.reason) for i in log.qc.issues}
+    assert got == {
+        (3, "bad checksum"),
+        (4, "truncated sentence"),
+        (5, "truncated sentence"),
+        (7, "time going backwards"),
+        (9, "bad checksum"),
+    }
+
+
+def test_usbl_units_beacons_and_bad_lines(tmp_path: Path):
+    path = tmp_path / "r.csv"
+    path.write_text(
+        "utc,beacon,twtt_s\n"
+        "2018-01-04T18:00:00.500Z,1,0.0120\n"
+        "2018-01-04T18:00:01.000Z,x,0.01\n"
+        "2018-01-04T18:00:01.500Z,1,nan\n"
+        "2018-01-04T18:00:02.000Z,1,-0.01\n"
+        "2018-01-04T18:00:02.500Z,7,0.01\n"
+        "2018-01-04T18:00:00.000Z,2,0.01\n"
+        "2018-01-04T18:00:03.500,2,0.0040\n"
+        "2018-01-04T18:00:04\n"
+    )
+    log = read_usbl(path, sound_speed_mps=1500.0, beacons=[1, 2])
+    np.testing.assert_allclose(log.range_m, [9.0, 3.0])  # 0.5 * c * TWTT
+    reasons = [(i.line, i.reason) for i in log.qc.issues]
+    assert reasons == [
+        (3, "non-numeric field"),
+        (4, "NaN or infinite value"),
+        (5, "negative or absurd range"),
+        (6, "unknown beacon id"),
+        (7, "time going backwards"),
+        (9, "truncated sentence"),
+    ]
+
+
+def test_empty_file_and_missing_header_are_data_errors(tmp_path: Path):
+    empty = tmp_path / "e.csv"
+    empty.write_text("")
+    with pytest.raises(DataError, match="empty file"):
+        read_usbl(empty)
+    nohead = tmp_path / "n.csv"
+    nohead.write_text("2018-01-04T18:00:00Z,1,3.0\n")
+    with pytest.raises(DataError, match=r"n\.csv:1: expected a header"):
+        read_usbl(nohead)
+    latin = tmp_path / "l.nmea"
+    latin.write_bytes(b"\xe9\xe8\n" + "\n".join([ZDA, GGA[0]]).encode() + b"\n")
+    log = read_nmea(latin)
+    assert log.n_fixes == 1 and log.qc.issues[0].reason == "wrong encoding"
+
+
+def test_alignment_interpolates_and_drops_ranges_without_gps(tmp_path: Path):
+    gps_path = tmp_path / "g.nmea"
+    gps_path.write_text("\n".join([ZDA, *GGA]) + "\n")
+    r_path = tmp_path / "r.csv"
+    r_path.write_text("utc,beacon,range_m\n2018-01-04T18:00:01.500Z,1,5.0\n2018-01-04T18:00:09.000Z,1,5.0\n")
+    aligned = align_ranges(read_nmea(gps_path), read_usbl(r_path))
+    assert aligned.dropped_no_gps == 1 and aligned.range_m.size == 1
+    # halfway between fixes 1 and 2: 1.5e-5 deg north of the first fix = 1.663 m (pymap3d geodesy)
+    assert aligned.vehicle_enu_m[0, 1] == pytest.approx(1.5e-5 * 110_865.0, rel=2e-3)
+
+
+@FUZZ
+@given(st.binary(max_size=300))
+def test_nmea_random_bytes_never_crash(tmp_path: Path, blob: bytes):
+    path = tmp_path / "f.nmea"
+    path.write_bytes(ZDA.encode() + b"\n" + blob + b"\n" + GGA[4].encode() + b"\n")
+    try:
+        log = read_nmea(path)
+    except DataError:
+        return
+    assert np.all(np.isfinite(log.lat_deg))
+
+
+@FUZZ
+@given(st.integers(0, len(GGA[2]) - 1), st.characters(codec="utf-8"))
+def test_nmea_mutated_valid_line_is_kept_or_named(tmp_path: Path, pos: int, char: str):
+    mutated = GGA[2][:pos] + char + GGA[2][pos + 1 :]
+    path = tmp_path / "m.nmea"
+    path.write_text("\n".join([ZDA, GGA[0], mutated, GGA[3]]) + "\n", encoding="utf-8")
+    log = read_nmea(path)
+    assert log.n_fixes + len(log.qc.issues) >= 3  # nothing silently lost
+    assert log.t_unix_s[0] == T0.timestamp()
+
+
+@FUZZ
+@given(st.text(max_size=80))
+def test_usbl_mutated_lines_never_crash(tmp_path: Path, junk: str):
+    path = tmp_path / "u.csv"
+    path.write_text(f"utc,beacon,range_m\n2018-01-04T18:00:00Z,1,3.0\n{junk}\n", encoding="utf-8")
+    log = read_usbl(path, qc=QcReport())
+    assert log.range_m[0] == 3.0
