@@ -264,6 +264,7 @@ def tdoa_jacobian(
     p = _check_pairs(pairs, unit.shape[-2])
     return (unit[..., p[:, 0], :] - unit[..., p[:, 1], :]) / sound_speed_mps
 
+
 # --- Two-way travel time (GNSS-Acoustic): down from the transmit position, back up to the receive one ---
 
 
