@@ -7,9 +7,10 @@ import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
+import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -17,6 +18,23 @@ from oceanloc.errors import ConfigError
 
 console = Console()
 err_console = Console(stderr=True)
+
+Workers = Annotated[
+    int | None,
+    typer.Option(
+        "--workers", min=1, help="Local worker processes (default: all cores; 1 runs in this process)."
+    ),
+]
+Scheduler = Annotated[
+    str | None,
+    typer.Option(
+        "--scheduler",
+        help="Dask scheduler address (tcp://host:8786), or local:N for a local Dask cluster of N workers.",
+    ),
+]
+Seed = Annotated[int | None, typer.Option("--seed", min=0, help="Master seed (same seed, same numbers).")]
+JsonOut = Annotated[Path | None, typer.Option("--json", help="Write the results as JSON to this file.")]
+FiguresOut = Annotated[Path | None, typer.Option("--figures", help="Write the figures (PNG) to this folder.")]
 
 
 @contextmanager

@@ -11,6 +11,7 @@ from oceanloc.cli import (  # noqa: F401
     localize,
     reproduce_dillard,
     reproduce_dillard_drrt,
+    reproduce_garcia,
     simulate_drift,
     simulate_logs,
     tdoa,

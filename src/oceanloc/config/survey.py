@@ -31,7 +31,7 @@ TOML files in ``oceanloc/config/scenarios/survey`` and are addressed by name (``
 
     [estimator]                        # optional
     delta_min_m = 1e-6
-    max_iterations = 50
+    max_iterations = 200
 
     [montecarlo]                       # optional
     runs = 1000
@@ -97,7 +97,7 @@ class EstimatorSettings:
     """Stopping rules of the MAP Gauss-Newton estimator (the papers' ``delta_min`` and ``J_max``)."""
 
     delta_min_m: float = 1e-6
-    max_iterations: int = 50
+    max_iterations: int = 200
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -213,7 +213,7 @@ def survey_scenario_from_table(root: Table) -> SurveyScenario:
     est_t = root.table("estimator", required=False)
     estimator = EstimatorSettings(
         delta_min_m=est_t.float("delta_min_m", 1e-6, lo=0.0, lo_open=True),
-        max_iterations=est_t.int("max_iterations", 50, lo=1, hi=10_000),
+        max_iterations=est_t.int("max_iterations", 200, lo=1, hi=10_000),
     )
     est_t.check_unknown()
 

@@ -87,7 +87,7 @@ class MapOptions:
     """
 
     delta_min_m: float = 1e-6
-    max_iterations: int = 50
+    max_iterations: int = 200
     surface_z_m: float | None = 0.0
     surface_axis: int = 2
     step_control: bool = True

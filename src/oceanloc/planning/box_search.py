@@ -95,16 +95,18 @@ def grid_maximum(
     points: int,
     *,
     periodic: ArrayLike | None = None,
-    block: int = 65536,
+    max_candidates: int = 1 << 20,
 ) -> BoxMaximum:
     """Exhaustive search over a regular grid (the reference the planners are tested against).
 
-    Evaluates ``points ** d`` grid points per problem in blocks of ``block`` candidates.
+    Evaluates ``points ** d`` grid points per problem, at most ``max_candidates`` (over all problems) per
+    call of ``fn`` to bound memory.
     """
     lo, hi, per = _box(lower, upper, periodic)
     mesh = np.stack(np.meshgrid(*grid_axes(lo, hi, points, per), indexing="ij"), axis=-1).reshape(-1, lo.size)
     best_val = np.full(batch, -np.inf)
     best_x = np.zeros((batch, lo.size))
+    block = max(1, max_candidates // batch)
     for start in range(0, mesh.shape[0], block):
         cand = mesh[start : start + block]
         vals = fn(np.broadcast_to(cand, (batch, *cand.shape)), np.arange(batch))
@@ -175,13 +177,16 @@ def maximize_in_box(
 
     stencil = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=d)))
     center = (len(stencil) - 1) // 2
-    plus = [_stencil_index(stencil, {i: 1}) for i in range(d)]
-    minus = [_stencil_index(stencil, {i: -1}) for i in range(d)]
-    cross = {
-        (i, j): [_stencil_index(stencil, {i: a, j: b}) for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
-        for i in range(d)
-        for j in range(i + 1, d)
-    }
+    plus = np.array([_stencil_index(stencil, {i: 1}) for i in range(d)])
+    minus = np.array([_stencil_index(stencil, {i: -1}) for i in range(d)])
+    pair_i, pair_j = np.triu_indices(d, 1)
+    corners = np.array(
+        [
+            [_stencil_index(stencil, {int(i): a, int(j): b}) for i, j in zip(pair_i, pair_j, strict=True)]
+            for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))
+        ]
+    ).reshape(4, -1)
+    diag = np.arange(d)
     live = np.arange(u.shape[0])
     for _ in range(opts.max_iterations):
         if live.size == 0:
@@ -192,13 +197,16 @@ def maximize_in_box(
         fs = fn_u(pts, rows[live])
         evaluations += len(stencil) * live.size / batch
         f0 = fs[:, center]
-        grad = np.stack([(fs[:, plus[i]] - fs[:, minus[i]]) / (2.0 * hl[:, i]) for i in range(d)], -1)
+        f_plus, f_minus = fs[:, plus], fs[:, minus]
+        grad = (f_plus - f_minus) / (2.0 * hl)
         hess = np.empty((live.size, d, d))
-        for i in range(d):
-            hess[:, i, i] = (fs[:, plus[i]] - 2.0 * f0 + fs[:, minus[i]]) / hl[:, i] ** 2
-            for j in range(i + 1, d):
-                pp, pm, mp, mm = (fs[:, c] for c in cross[(i, j)])
-                hess[:, i, j] = hess[:, j, i] = (pp - pm - mp + mm) / (4.0 * hl[:, i] * hl[:, j])
+        hess[:, diag, diag] = (f_plus - 2.0 * f0[:, None] + f_minus) / hl**2
+        if pair_i.size:
+            mixed = (fs[:, corners[0]] - fs[:, corners[1]] - fs[:, corners[2]] + fs[:, corners[3]]) / (
+                4.0 * hl[:, pair_i] * hl[:, pair_j]
+            )
+            hess[:, pair_i, pair_j] = mixed
+            hess[:, pair_j, pair_i] = mixed
         lam, vec = np.linalg.eigh(hess)
         curvature = np.maximum(np.abs(lam), 1e-9 * np.max(np.abs(lam), axis=-1, keepdims=True) + 1e-300)
         step = np.einsum("bij,bj->bi", vec, np.einsum("bji,bj->bi", vec, grad) / curvature)
@@ -216,9 +224,15 @@ def maximize_in_box(
         u[live] = np.where(use_newton[:, None], newton, np.where(use_sten[:, None], u_sten, ul))
         f[live] = np.where(use_newton, f_newton, np.where(use_sten, f_sten, f0))
         s_now = scale[live]
-        step_scale = 2.0 * np.max(np.abs(step) / base, axis=-1)
+        step_scale = np.clip(2.0 * np.max(np.abs(step) / base, axis=-1), scale_min, 1.0)
+        # Centre best with a negative-definite model: a local maximum at this resolution, and the true
+        # one lies within the Newton step; otherwise shrink fourfold. Accepted Newton steps set the
+        # spacing (it grows back when the trust region clipped the step).
+        at_max = np.all(lam < 0.0, axis=-1)
         scale[live] = np.where(
-            use_newton, np.clip(step_scale, s_now / 4.0, s_now), np.where(use_sten, s_now, s_now / 4.0)
+            use_newton,
+            step_scale,
+            np.where(use_sten, s_now, np.where(at_max, np.minimum(step_scale, s_now / 4.0), s_now / 4.0)),
         )
         live = live[scale[live] > scale_min]
 

@@ -71,19 +71,35 @@ def information_gain(
     sites = np.asarray(sites_m, dtype=float)
     est = np.asarray(estimates_m, dtype=float)
     L = np.asarray(chol, dtype=float)
-    k = sites.shape[-2]
     # Component arrays of shape (..., k, M): axis -2 is the step, axis -1 the transponder.
     d = [est[..., None, :, c] - sites[..., :, None, c] for c in range(3)]
-    inv_r = 1.0 / np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    h = [dc * inv_r for dc in d]
-    Lc = [[L[..., None, :, i, j] for j in range(3)] for i in range(3)]
-    u = [
-        h[0] * Lc[0][0] + h[1] * Lc[1][0] + h[2] * Lc[2][0],
-        h[1] * Lc[1][1] + h[2] * Lc[2][1],
-        h[2] * Lc[2][2],
-    ]
-    per_m = _log_det_identity_plus_gram(u, k)
+    lower = [L[..., None, :, i, j] for i, j in _LOWER]
+    per_m = whitened_gain(d[0], d[1], d[2], lower)
     return per_m.sum(axis=-1) if total else per_m
+
+
+_LOWER = ((0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2))
+"""Index pairs of the lower triangle of a 3x3 Cholesky factor, in the order :func:`whitened_gain` takes."""
+
+
+def whitened_gain(dx: FloatArray, dy: FloatArray, dz: FloatArray, lower: list[FloatArray]) -> FloatArray:
+    """Per-transponder gain ``log det(I_k + U U^T)`` from line-of-sight components.
+
+    Parameters
+    ----------
+    dx, dy, dz : (..., k, M) float
+        Components of ``p_hat_m - site`` for each step and transponder (broadcastable).
+    lower : list of six (..., 1 or k, M) float
+        ``L00, L10, L20, L11, L21, L22`` of :func:`scaled_cholesky` per transponder.
+
+    Returns
+    -------
+    (..., M) float
+    """
+    l00, l10, l20, l11, l21, l22 = lower
+    inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + dz * dz)
+    u = [(dx * l00 + dy * l10 + dz * l20) * inv_r, (dy * l11 + dz * l21) * inv_r, dz * (l22 * inv_r)]
+    return _log_det_identity_plus_gram(u, dx.shape[-2])
 
 
 def _log_det_identity_plus_gram(u: list[FloatArray], k: int) -> FloatArray:

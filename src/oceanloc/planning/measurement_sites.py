@@ -31,7 +31,7 @@ from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import ConfigError
 from oceanloc.models.vehicles import unicycle_rollout
 from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
-from oceanloc.planning.information import information_gain, scaled_cholesky
+from oceanloc.planning.information import information_gain, scaled_cholesky, whitened_gain
 
 
 class PlanStatus(Enum):
@@ -148,23 +148,13 @@ class LookaheadPlanner:
 
     def gain(self, state: PlanningState, yaw_rates_rad_s: FloatArray) -> FloatArray:
         """Information gain of yaw-rate sequences ``(B, C, k)`` -> ``(B, C)``."""
-        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
-        return self._gain(state, chol, yaw_rates_rad_s, np.arange(state.batch))
-
-    def _gain(self, state: PlanningState, chol: FloatArray, rates: FloatArray, rows: IntArray) -> FloatArray:
-        poses = unicycle_rollout(
-            state.pos_enu_m[rows, None, :], state.yaw_rad[rows, None], rates, self.speed_mps, self.period_s
-        )
-        return information_gain(poses.pos_enu_m, state.estimates_m[rows, None], chol[rows])
+        return _YawRateObjective(state, self)(yaw_rates_rad_s, np.arange(state.batch))
 
     def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
         """The D-optimal yaw-rate sequence for each problem (``rng`` is not used)."""
         start = time.perf_counter()
-        chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
         lower, upper = self.bounds()
-        best = maximize_in_box(
-            lambda w, rows: self._gain(state, chol, w, rows), lower, upper, state.batch, options=self.search
-        )
+        best = maximize_in_box(_YawRateObjective(state, self), lower, upper, state.batch, options=self.search)
         poses = unicycle_rollout(state.pos_enu_m, state.yaw_rad, best.x, self.speed_mps, self.period_s)
         return PlanResult(
             next_pos_enu_m=poses.pos_enu_m[:, 0],
@@ -174,6 +164,34 @@ class LookaheadPlanner:
             objective=best.value,
             solve_time_s=time.perf_counter() - start,
         )
+
+
+class _YawRateObjective:
+    """The look-ahead objective with each problem's constants unpacked once (the planner's hot path).
+
+    ``objective(rates (b, C, k), rows (b,)) -> (b, C)``: the unicycle rollout (eq. 1) in closed form and the
+    gain of :func:`oceanloc.planning.information.whitened_gain`, component by component.
+    """
+
+    def __init__(self, state: PlanningState, planner: LookaheadPlanner) -> None:
+        pos, est = state.pos_enu_m, state.estimates_m
+        chol = scaled_cholesky(state.covariances_m2, planner.sigma_range_m)
+        self.x0, self.y0, self.yaw0 = pos[:, 0], pos[:, 1], state.yaw_rad
+        self.ex, self.ey = est[..., 0], est[..., 1]
+        self.dz = est[..., 2] - pos[:, 2:3]
+        self.lower = [chol[..., i, j] for i, j in ((0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2))]
+        self.step_m = planner.speed_mps * planner.period_s
+        self.period_s = planner.period_s
+
+    def __call__(self, rates: FloatArray, rows: IntArray) -> FloatArray:
+        yaw = self.yaw0[rows, None, None] + np.cumsum(rates, axis=-1) * self.period_s
+        px = self.x0[rows, None, None] + np.cumsum(np.cos(yaw), axis=-1) * self.step_m
+        py = self.y0[rows, None, None] + np.cumsum(np.sin(yaw), axis=-1) * self.step_m
+        dx = self.ex[rows, None, None, :] - px[..., None]
+        dy = self.ey[rows, None, None, :] - py[..., None]
+        dz = self.dz[rows, None, None, :]
+        lower = [c[rows, None, None, :] for c in self.lower]
+        return whitened_gain(dx, dy, dz, lower).sum(axis=-1)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

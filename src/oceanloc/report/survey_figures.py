@@ -1,0 +1,132 @@
+"""Figures of the transponder-survey work (Garcia et al. 2019 Figs. 1-8; thesis Fig. 5.3)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from scipy import stats
+
+from oceanloc._typing import FloatArray
+from oceanloc.evaluation.ellipses import ConfidenceEllipse, confidence_ellipse
+from oceanloc.evaluation.survey import SurveyMonteCarlo
+from oceanloc.report._figures import save_figure
+from oceanloc.sim.survey import SurveyRuns
+
+_K_COLOURS = {0: "tab:gray", 1: "tab:blue", 2: "tab:orange", 3: "tab:green"}
+
+
+def _k_label(k: int) -> str:
+    return "random (k = 0)" if k == 0 else f"k = {k}"
+
+
+def estimates_figure(
+    estimates_en_m: FloatArray,
+    truth_en_m: FloatArray,
+    actual: ConfidenceEllipse,
+    fitted: ConfidenceEllipse,
+    path: Path,
+) -> Path:
+    """Fig. 1: estimates in the E-N plane with the eq. (22) ellipse and the one fitted to the samples."""
+    fig = Figure(figsize=(6, 5.5))
+    ax = fig.add_subplot()
+    ax.scatter(estimates_en_m[:, 0], estimates_en_m[:, 1], s=6, alpha=0.5, label="estimated E-N positions")
+    ax.plot(*truth_en_m, "r*", ms=12, label="true E-N position")
+    ax.plot(*fitted.points().T, "b-", label="estimated 95% confidence (fitted)")
+    ax.plot(*actual.points().T, "k--", label="actual 95% confidence (eq. 22)")
+    ax.set(xlabel="east [m]", ylabel="north [m]", title="MAP estimates after N = 4 ranges")
+    ax.axis("equal")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
+    return save_figure(fig, path)
+
+
+def nees_figure(nees: FloatArray, dof: int, path: Path, title: str) -> Path:
+    """Figs. 2, 4, 7: normalized NEES histogram with the chi-square pdf."""
+    fig = Figure(figsize=(6, 4))
+    ax = fig.add_subplot()
+    top = float(np.percentile(nees, 99.5))
+    ax.hist(nees, bins=40, range=(0, top), density=True, alpha=0.6, label="NEES (eq. 44)")
+    x = np.linspace(0, top, 300)
+    ax.plot(x, stats.chi2(dof).pdf(x), color="tab:orange", lw=2, label=f"chi-square pdf, {dof} dof")
+    ax.set(xlabel="NEES", ylabel="density", title=title)
+    ax.legend()
+    return save_figure(fig, path)
+
+
+def logdet_rmse_figure(
+    studies: Mapping[int, SurveyMonteCarlo], transponder: int, path: Path, title: str
+) -> Path:
+    """Figs. 3 and 6: mean log det Y_n and RMSEE (one transponder) against n for every horizon."""
+    fig = Figure(figsize=(11, 4))
+    ax_ld, ax_rm = fig.subplots(1, 2)
+    for k, study in sorted(studies.items()):
+        n = np.arange(1, study.log_det.mean.size + 1)
+        ax_ld.plot(n, study.log_det.mean, color=_K_COLOURS.get(k), label=_k_label(k))
+        ax_rm.semilogy(n, study.rmsee_m[:, transponder], color=_K_COLOURS.get(k), label=_k_label(k))
+    ax_ld.set(xlabel="measurement n", ylabel="mean log det Y_n", title="(a) D-optimal value")
+    ax_rm.set(xlabel="measurement n", ylabel=f"RMSEE of transponder {transponder + 1} [m]", title="(b) RMSEE")
+    for ax in (ax_ld, ax_rm):
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle(title)
+    return save_figure(fig, path)
+
+
+def trajectories_figure(
+    runs: Mapping[str, SurveyRuns], path: Path, title: str, *, ellipses: bool = False
+) -> Path:
+    """Fig. 8: measurement paths of one run per planner, with the transponders (and 95 % ellipses)."""
+    fig = Figure(figsize=(7, 6.5))
+    ax = fig.add_subplot()
+    first = next(iter(runs.values()))
+    colours = ["tab:gray", "tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown"]
+    for (label, run), colour in zip(runs.items(), colours, strict=False):
+        sites = run.sites_enu_m[0]
+        ax.plot(sites[:, 0], sites[:, 1], ".-", color=colour, lw=1, ms=3, label=label)
+        if ellipses:
+            final = confidence_ellipse(run.estimates_m[0, -1, :, :2], run.covariances_m2[0, -1, :, :2, :2])
+            for pts in final.points():
+                ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1)
+    truth = first.transponders_enu_m
+    ax.plot(truth[:, 0], truth[:, 1], "r^", ms=10, mec="k", label="transponders")
+    start = first.sites_enu_m[0, 0]
+    ax.plot(start[0], start[1], "o", color="tab:green", mec="k", ms=10, label="start")
+    ax.set(xlabel="east [m]", ylabel="north [m]", title=title)
+    ax.axis("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_figure(fig, path)
+
+
+def major_axis_figure(
+    planned_en_m: FloatArray,
+    reaches_m: FloatArray,
+    start_en_m: FloatArray,
+    estimate_en_m: FloatArray,
+    cov_en_m2: FloatArray,
+    path: Path,
+    title: str,
+) -> Path:
+    """Journal Fig. 5 / thesis Fig. 5.3: planned next sites as the reach grows, with the error ellipse's
+    major axis (the least-informed direction) through the estimate."""
+    fig = Figure(figsize=(7, 6.5))
+    ax = fig.add_subplot()
+    axis = np.linalg.eigh(cov_en_m2)[1][:, -1]
+    span = 1.1 * float(np.max(np.linalg.norm(planned_en_m - estimate_en_m, axis=1)))
+    line = estimate_en_m + np.outer(np.linspace(-span, span, 2), axis)
+    ax.plot(line[:, 0], line[:, 1], "--", color="tab:purple", label="major axis of the error ellipse")
+    ell = confidence_ellipse(estimate_en_m, cov_en_m2, 0.95)
+    scale = span / max(float(ell.semi_major_m), 1e-12) * 0.3
+    shape = confidence_ellipse(estimate_en_m, cov_en_m2 * scale**2, 0.95)
+    ax.plot(*shape.points().T, color="tab:purple", lw=1, label="error ellipse (shape, scaled)")
+    sc = ax.scatter(planned_en_m[:, 0], planned_en_m[:, 1], c=reaches_m, marker="D", s=25, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="reach [m]")
+    ax.plot(*start_en_m, "r*", ms=12, label="p_V(1)")
+    ax.plot(*estimate_en_m, "k^", ms=8, label="transponder estimate")
+    ax.set(xlabel="east [m]", ylabel="north [m]", title=title)
+    ax.axis("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_figure(fig, path)
