@@ -195,7 +195,9 @@ class ObstacleMap:
         """``(...)`` bool: the straight segments ``a -> b`` stay in bounds and clear of every obstacle.
 
         Exact for rectangles and polygons (with inflation: the distance from the segment to the obstacle
-        exceeds the margin); occupancy grids are checked at points spaced a quarter cell apart.
+        exceeds the margin); occupancy grids are checked at points spaced a quarter cell apart. Obstacles
+        count as closed sets here, so a segment that only grazes an edge is blocked (conservative), while
+        :meth:`is_free` keeps the thesis' half-open cells for single points.
 
         Parameters
         ----------
