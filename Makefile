@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml | $(BIN)/python
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/oceanloc demo
+	$(BIN)/oceanloc demo --out oceanloc-demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

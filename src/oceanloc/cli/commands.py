@@ -14,5 +14,6 @@ from oceanloc.cli import (  # noqa: F401
     reproduce_garcia,
     simulate_drift,
     simulate_logs,
+    simulate_survey,
     tdoa,
 )

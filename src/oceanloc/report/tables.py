@@ -9,7 +9,7 @@ from rich.table import Table
 from oceanloc.reproduce.garcia2019 import Check, TableRow
 
 
-def reproduction_table(rows: Sequence[TableRow], title: str, rmse_label: str = "RMSEE [m]") -> Table:
+def reproduction_table(rows: Sequence[TableRow], title: str, rmse_label: str = "RMSEE (m)") -> Table:
     """Our Monte Carlo beside the paper's values, one row per (epoch, k)."""
     table = Table(title=title)
     for col in (

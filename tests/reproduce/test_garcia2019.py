@@ -1,0 +1,48 @@
+import numpy as np
+import pytest
+
+from oceanloc.reproduce import garcia2018, garcia2019
+
+
+def test_estimator_study_is_consistent_and_ellipses_agree():
+    # Section V-A with 300 runs: mean NEES within 3 SE of 3 (sqrt(6/300) = 0.14), the fitted 95 % ellipse
+    # within 15 % of eq. (22)'s (the sample covariance of 300 draws has ~6 % relative error per axis).
+    study = garcia2019.estimator_study(300, seed=4)
+    assert study.check.mean_within_band and study.check.p_value > 0.01
+    assert study.sample_ellipse.semi_major_m == pytest.approx(study.actual_ellipse.semi_major_m, rel=0.15)
+    assert study.sample_ellipse.semi_minor_m == pytest.approx(study.actual_ellipse.semi_minor_m, rel=0.15)
+
+
+def test_small_reproduction_has_the_issue_json_shape():
+    result = garcia2019.reproduce_garcia2019(runs=6, seed=1, horizons=(0, 1))
+    record = garcia2019.to_json(result)
+    assert set(record["tables"]) == {"III", "V"}
+    row = record["tables"]["III"][0]
+    assert {"epoch", "k", "rmse_m", "logdet_mean", "logdet_std"} <= set(row)
+    assert [(r["epoch"], r["k"]) for r in record["tables"]["V"]] == [
+        (3, 0),
+        (3, 1),
+        (7, 0),
+        (7, 1),
+        (30, 0),
+        (30, 1),
+    ]
+    assert record["nees"]["M1"]["dof"] == 3 and record["nees"]["M4"]["dof"] == 12
+    assert set(record["plan_time_s"]["M4"]) == {"1"}
+    assert all({"name", "passed", "detail"} <= set(c) for c in record["checks"])
+
+
+def test_fig5_and_fig53_planned_points_converge_onto_the_major_axis():
+    for sweep in (
+        garcia2019.fig5_sweep(np.array([10.0, 40.0, 80.0])),
+        garcia2018.fig53_sweep(np.array([10.0, 40.0, 80.0])),
+    ):
+        assert np.all(np.diff(sweep.angle_deg) < 0)
+        assert sweep.angle_deg[-1] < 0.2
+
+
+def test_greedy_reproduction_json():
+    result = garcia2018.reproduce_garcia2018_greedy(runs=4, seed=2)
+    record = garcia2018.to_json(result)
+    assert set(record["tables"]) == {"5.3", "5.7"}
+    assert set(record["nees"]["M4"]) == {"random", "greedy"}
