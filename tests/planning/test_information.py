@@ -7,7 +7,7 @@ from oceanloc.planning.information import (
     log_det_information,
     scaled_cholesky,
 )
-from tests.planning.problems import random_planning_states
+from oceanloc.planning.random_problems import random_planning_states
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4])

@@ -12,8 +12,8 @@ from oceanloc.planning.measurement_sites import (
     RandomDiskPlanner,
     RandomYawPlanner,
 )
+from oceanloc.planning.random_problems import random_planning_states
 from oceanloc.units import DEG
-from tests.planning.problems import random_planning_states
 
 W_MAX = 30 * DEG
 

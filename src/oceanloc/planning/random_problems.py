@@ -1,4 +1,4 @@
-"""Random but realistic planning problems for the transponder-survey planners (shared by tests and bench)."""
+"""Random but realistic planning problems for the transponder-survey planners (tests and benchmarks)."""
 
 from __future__ import annotations
 
