@@ -102,8 +102,9 @@ def latency() -> None:
                 else ""
             )
             paper = PAPER_TIMES_S[f"M{m}"][k]
+            p90_ms = 1e3 * float(np.percentile(times, 90))
             print(
-                f"  M={m} k={k}: median {median_ms:6.2f} ms, 90th pct {1e3 * np.percentile(times, 90):6.2f} ms; "
+                f"  M={m} k={k}: median {median_ms:6.2f} ms, 90th pct {p90_ms:6.2f} ms; "
                 f"paper {paper:.2f} s ({paper * 1e3 / median_ms:,.0f}x){target}"
             )
 
