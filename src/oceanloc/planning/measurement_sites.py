@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from enum import Enum
 from typing import Protocol
 
 import numpy as np
@@ -32,17 +31,7 @@ from oceanloc.errors import ConfigError
 from oceanloc.models.vehicles import unicycle_rollout
 from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
 from oceanloc.planning.information import information_gain, scaled_cholesky, whitened_gain
-
-
-class PlanStatus(Enum):
-    """Outcome of a planner call (OMPL's vocabulary)."""
-
-    EXACT = "exact"
-    """The planning problem was solved as posed (for the optimizers: the global optimum to tolerance)."""
-    APPROXIMATE = "approximate"
-    """A usable plan that does not meet the request exactly."""
-    FAILED = "failed"
-    """No plan."""
+from oceanloc.planning.status import PlanStatus
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

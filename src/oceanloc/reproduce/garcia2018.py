@@ -29,6 +29,8 @@ from oceanloc.reproduce.survey_tables import (
     MajorAxisSweep,
     TableRow,
     major_axis_sweep,
+    nees_checks,
+    nees_json,
     rows_json,
     table_rows,
 )
@@ -92,18 +94,7 @@ def acceptance_checks(
                     detail=f"{r.logdet_mean:.2f} vs {r.paper_logdet_mean:.2f} (z = {r.logdet_z:+.1f})",
                 )
             )
-    for label, by_k in studies.items():
-        for k, study in sorted(by_k.items()):
-            c = study.nees_final
-            lo, hi = c.mean_band
-            checks.append(
-                Check(
-                    name=f"{label}, {'greedy' if k else 'random'}: mean NEES at n = 50 in 3M +- 3 sqrt(6M/R)",
-                    passed=c.mean_within_band,
-                    detail=f"{c.mean:.2f} in [{lo:.2f}, {hi:.2f}], KS p = {c.p_value:.2f}",
-                )
-            )
-    return checks
+    return checks + nees_checks(studies, {0: "random", 1: "greedy"})
 
 
 def reproduce_garcia2018_greedy(
@@ -143,14 +134,7 @@ def to_json(result: Garcia2018Result) -> dict[str, object]:
         "seed": result.seed,
         "tables": {name: rows_json(rows) for name, rows in result.tables.items()},
         "nees": {
-            label: {
-                ("greedy" if k else "random"): {
-                    "mean": s.nees_final.mean,
-                    "dof": s.nees_final.dof,
-                    "p_value": s.nees_final.p_value,
-                }
-                for k, s in sorted(by_k.items())
-            }
+            label: {("greedy" if k else "random"): nees_json(s) for k, s in sorted(by_k.items())}
             for label, by_k in result.studies.items()
         },
         "plan_time_s": {label: by_k[1].plan_time_s for label, by_k in result.studies.items()},

@@ -91,6 +91,31 @@ def rows_json(rows: list[TableRow]) -> list[dict[str, float]]:
     ]
 
 
+def nees_checks(
+    studies: Mapping[str, Mapping[int, SurveyMonteCarlo]], planner_name: Mapping[int, str]
+) -> list[Check]:
+    """Mean NEES at the last epoch within ``3M +- 3 sqrt(6M/R)`` for every study (KS p-value alongside)."""
+    checks = []
+    for label, by_k in studies.items():
+        for k, study in sorted(by_k.items()):
+            c = study.nees_final
+            lo, hi = c.mean_band
+            checks.append(
+                Check(
+                    name=f"{label}, {planner_name[k]}: mean NEES at n = {study.scenario.epochs} "
+                    "in 3M +- 3 sqrt(6M/R)",
+                    passed=c.mean_within_band,
+                    detail=f"{c.mean:.2f} in [{lo:.2f}, {hi:.2f}], KS p = {c.p_value:.2f}",
+                )
+            )
+    return checks
+
+
+def nees_json(study: SurveyMonteCarlo) -> dict[str, float]:
+    """The NEES summary of a study as a JSON record."""
+    return {"mean": study.nees_final.mean, "dof": study.nees_final.dof, "p_value": study.nees_final.p_value}
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class MajorAxisSweep:
     """Planned next sites after the first range as the reach grows (journal Fig. 5, thesis Fig. 5.3).

@@ -7,7 +7,6 @@ optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> 
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,17 +19,7 @@ from oceanloc.planning.drift_rrt.objective import HdopTerm
 from oceanloc.planning.drift_rrt.path import DriftPath
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
-
-
-class PlanStatus(enum.Enum):
-    """Outcome of a planner (OMPL's ``PlannerStatus``)."""
-
-    EXACT = "exact"
-    """A path reaches the goal disk."""
-    APPROXIMATE = "approximate"
-    """No path reaches the goal; the returned path ends as close to it as the planner got."""
-    FAILED = "failed"
-    """No path at all (for example an invalid start)."""
+from oceanloc.planning.status import PlanStatus
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
