@@ -10,7 +10,15 @@ import typer
 from rich.table import Table
 
 from oceanloc.cli import reproduce
-from oceanloc.cli._common import console, ensure_dir, err_console, progress_bar, write_json
+from oceanloc.cli._common import (
+    Scheduler,
+    Workers,
+    console,
+    ensure_dir,
+    err_console,
+    progress_bar,
+    write_json,
+)
 from oceanloc.config.flock import load_flock_scenario
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.report import flock_figures
@@ -32,8 +40,6 @@ from oceanloc.reproduce.dillard_lab_tdoa import (
 _ROW_NAMES = ("X (m²)", "Y (m²)", "U (m/s)²", "V (m/s)²")
 
 _SCENARIO_HELP = "Built-in flock scenario name or TOML file."
-_WORKERS_HELP = "Local worker processes (default: all cores; 1 runs in this process)."
-_SCHEDULER_HELP = "Dask scheduler address, or local:N for a local Dask cluster."
 
 
 def _pm(mean: float, spread: float) -> str:
@@ -105,8 +111,8 @@ def dillard_filters(
     controls: bool = typer.Option(
         True, "--controls/--no-controls", help="Also run each filter with the other's motion model."
     ),
-    workers: int | None = typer.Option(None, "--workers", help=_WORKERS_HELP),
-    scheduler: str | None = typer.Option(None, "--scheduler", help=_SCHEDULER_HELP),
+    workers: Workers = None,
+    scheduler: Scheduler = None,
 ) -> None:
     """Thesis Table 2: EKF vs UKF bearing-only tracking by four drifting nodes (Chapter III.E)."""
     sc = load_flock_scenario(scenario)
@@ -161,8 +167,8 @@ def dillard_lab_tdoa(
         Path | None, typer.Option("--figures", help="Folder for the PNG figures (Figs. 62, 63, 67).")
     ] = None,
     scenario: str = typer.Option("dillard-lab-tdoa", "--scenario", help=_SCENARIO_HELP),
-    workers: int | None = typer.Option(None, "--workers", help=_WORKERS_HELP),
-    scheduler: str | None = typer.Option(None, "--scheduler", help=_SCHEDULER_HELP),
+    workers: Workers = None,
+    scheduler: Scheduler = None,
 ) -> None:
     """Thesis lab test: TDOA UKF, three nodes in a Y, random target; residual vs HDOP (Chapter V.C)."""
     with open_executor(scheduler, workers) as executor, progress_bar(runs, "Monte Carlo runs") as advance:

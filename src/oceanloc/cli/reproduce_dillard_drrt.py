@@ -10,7 +10,7 @@ from rich.table import Table
 
 from oceanloc._random import run_generators
 from oceanloc.cli import reproduce
-from oceanloc.cli._common import console, ensure_dir, err_console, write_json
+from oceanloc.cli._common import Scheduler, Workers, console, ensure_dir, err_console, write_json
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
@@ -45,10 +45,8 @@ def dillard_drrt(
     reference_spacing: float = typer.Option(
         50.0, "--reference-spacing", min=10.0, help="Lattice spacing (m) of the best-achievable reference."
     ),
-    workers: int | None = typer.Option(
-        None, "--workers", min=1, help="Local worker processes (default: all cores)."
-    ),
-    scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address or local:N."),
+    workers: Workers = None,
+    scheduler: Scheduler = None,
 ) -> None:
     """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner.
 

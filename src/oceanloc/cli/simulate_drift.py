@@ -11,7 +11,15 @@ from rich.table import Table
 
 from oceanloc._random import run_generators
 from oceanloc.cli import simulate
-from oceanloc.cli._common import console, ensure_dir, err_console, progress_bar, write_json
+from oceanloc.cli._common import (
+    Scheduler,
+    Workers,
+    console,
+    ensure_dir,
+    err_console,
+    progress_bar,
+    write_json,
+)
 from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor, run_chunked
@@ -43,8 +51,8 @@ def drift_follow(
     figures: Annotated[
         Path | None, typer.Option("--figures", help="Write the Fig. 72-style PNG here.")
     ] = None,
-    workers: int | None = typer.Option(None, "--workers", min=1, help="Local worker processes."),
-    scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address or local:N."),
+    workers: Workers = None,
+    scheduler: Scheduler = None,
 ) -> None:
     """Follow a plan with watch circles in a perturbed current; arrival rate, extra energy, replans."""
     sc = load_drift_scenario(scenario)

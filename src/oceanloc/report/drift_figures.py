@@ -8,17 +8,15 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.patches import Polygon, Rectangle
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Polygon, Rectangle
 
 from oceanloc._typing import FloatArray
 from oceanloc.planning.drift_rrt.path import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree
+from oceanloc.report._figures import save_figure
 
 PATH_COLOURS = {
     "thesis-single": "tab:orange",
@@ -26,13 +24,6 @@ PATH_COLOURS = {
     "oceanloc": "magenta",
     "best achievable": "black",
 }
-
-
-def _save(fig: plt.Figure, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    return path
 
 
 def draw_map(ax: Axes, problem: DriftProblem, *, quiver_n: int = 21, km: bool = True) -> None:
@@ -74,9 +65,7 @@ def draw_map(ax: Axes, problem: DriftProblem, *, quiver_n: int = 21, km: bool = 
     ax.plot(*(problem.start_m * s), "p", color="tab:green", ms=13, mec="k", zorder=5, label="start")
     ax.plot(*(problem.goal_m * s), "*", color="tab:red", ms=15, mec="k", zorder=5, label="goal")
     ax.add_patch(
-        plt.Circle(
-            tuple(problem.goal_m * s), problem.goal_tolerance_m * s, fill=False, color="tab:red", lw=0.8
-        )
+        Circle(tuple(problem.goal_m * s), problem.goal_tolerance_m * s, fill=False, color="tab:red", lw=0.8)
     )
     ax.set_xlim(x0 * s, x1 * s)
     ax.set_ylim(y0 * s, y1 * s)
@@ -130,32 +119,35 @@ def tree_figure(
     path: Path, problem: DriftProblem, tree: SearchTree, plan: DriftPath | None, title: str
 ) -> Path:
     """Thesis Figs. 46 and 50: the DR-RRT* tree, its drift and hop branches and the final path."""
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig = Figure(figsize=(7, 7))
+    ax = fig.add_subplot()
     draw_map(ax, problem)
     draw_tree(ax, tree)
     if plan is not None:
         draw_path(ax, plan, "magenta", "final path")
     ax.set_title(title)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def paths_figure(path: Path, problem: DriftProblem, plans: Mapping[str, DriftPath], title: str) -> Path:
     """Final paths of several planners over the current and obstacles."""
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig = Figure(figsize=(7, 7))
+    ax = fig.add_subplot()
     draw_map(ax, problem)
     for name, plan in plans.items():
         draw_path(ax, plan, PATH_COLOURS.get(name, "tab:purple"), name)
     ax.set_title(title)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def energy_figure(
     path: Path, energies: Mapping[str, FloatArray], direct_wh: float, best_wh: float, title: str
 ) -> Path:
     """Thesis Figs. 51/53: flight energy of every run, with direct flight and the best achievable."""
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.add_subplot()
     for name, e in energies.items():
         ax.plot(np.arange(e.size), e, ".", ms=3, color=PATH_COLOURS.get(name, "tab:purple"), label=name)
     ax.axhline(direct_wh, color="tab:red", ls="--", label=f"direct flight {direct_wh:.1f} Wh")
@@ -164,7 +156,7 @@ def energy_figure(
     ax.set_ylabel("flight energy, Wh")
     ax.set_title(title)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def following_figure(
@@ -177,12 +169,13 @@ def following_figure(
     title: str,
 ) -> Path:
     """Thesis Fig. 72: planned path, watch circles and the tracks actually followed (plus signs)."""
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig = Figure(figsize=(7, 7))
+    ax = fig.add_subplot()
     draw_map(ax, problem)
     draw_path(ax, plan, "magenta", "plan")
     for takeoff in plan.hops_m()[:, 0]:
         ax.add_patch(
-            plt.Circle(
+            Circle(
                 tuple(takeoff * 1e-3), watch_circle_m * 1e-3, fill=False, color="tab:purple", lw=1.0, zorder=5
             )
         )
@@ -201,4 +194,4 @@ def following_figure(
             ax.plot(seg[:, 0] * 1e-3, seg[:, 1] * 1e-3, ":", color="tab:red", lw=0.8, alpha=0.6)
     ax.set_title(title)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)

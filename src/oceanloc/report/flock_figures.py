@@ -14,16 +14,11 @@ from matplotlib.figure import Figure
 
 from oceanloc.estimation.time_delay import DelayEstimate
 from oceanloc.planning.dop import DopMap, PlacementResult
+from oceanloc.report._figures import save_figure
 from oceanloc.reproduce.dillard_filters import DillardFiltersResult
 from oceanloc.reproduce.dillard_lab_tdoa import LabTdoaResult
 
 _STATE_LABELS = ("x (m)", "y (m)", "u (m/s)", "v (m/s)", "ax (m/s²)", "ay (m/s²)")
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    return path
 
 
 def flock_geometry(result: DillardFiltersResult, path: Path) -> Path:
@@ -37,7 +32,7 @@ def flock_geometry(result: DillardFiltersResult, path: Path) -> Path:
     ax.set(xlabel="east (m)", ylabel="north (m)", title="Nodes drifting on a ring, target moving outward")
     ax.set_aspect("equal", adjustable="datalim")
     ax.legend(loc="best", fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def estimate_vs_truth(result: DillardFiltersResult, key: str, path: Path) -> Path:
@@ -54,7 +49,7 @@ def estimate_vs_truth(result: DillardFiltersResult, key: str, path: Path) -> Pat
         xlabel="east (m)", ylabel="north (m)", title=f"Bearing-only tracking by four nodes: {v.variant.label}"
     )
     ax.legend(loc="best", fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def residuals(result: DillardFiltersResult, key: str, path: Path) -> Path:
@@ -80,7 +75,7 @@ def residuals(result: DillardFiltersResult, key: str, path: Path) -> Path:
         ax.set_ylim(-lim, lim)
     axes[0].set_title(f"Residuals: {v.variant.label} ({result.runs} runs)")
     axes[1].set_xlabel("time (s)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def rmse_vs_bound(result: DillardFiltersResult, path: Path) -> Path:
@@ -97,7 +92,7 @@ def rmse_vs_bound(result: DillardFiltersResult, path: Path) -> Path:
     ax.semilogy(t[::step], np.sqrt(result.pcrlb_position_m2[::step]), "k--", lw=1, label="sqrt(PCRLB)")
     ax.set(xlabel="time (s)", ylabel="position RMSE (m)", title=f"Position RMSE over {result.runs} runs")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def lab_residual_and_hdop(result: LabTdoaResult, path: Path) -> Path:
@@ -117,7 +112,7 @@ def lab_residual_and_hdop(result: LabTdoaResult, path: Path) -> Path:
         transform=axes[1].transAxes,
         fontsize=8,
     )
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def lab_tdoa_measurements(result: LabTdoaResult, path: Path) -> Path:
@@ -130,7 +125,7 @@ def lab_tdoa_measurements(result: LabTdoaResult, path: Path) -> Path:
         ax.plot(t, result.tdoa_clean_s[:, p] * 1e3, lw=1, color=f"C{p}", label=f"pair {p + 1}")
     ax.set(xlabel="time (s)", ylabel="TDOA (ms)", title="TDOA pseudo-measurements: true (lines) and noisy")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def lab_track(result: LabTdoaResult, path: Path) -> Path:
@@ -143,7 +138,7 @@ def lab_track(result: LabTdoaResult, path: Path) -> Path:
     ax.set(xlabel="x (m)", ylabel="y (m)", title="Lab TDOA test (simulated)")
     ax.set_aspect("equal")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def hdop_map_figure(dop: DopMap, path: Path) -> Path:
@@ -160,7 +155,7 @@ def hdop_map_figure(dop: DopMap, path: Path) -> Path:
     ax.set(xlabel="moving node east (m)", ylabel="moving node north (m)", title=f"{dop.kind} HDOP map")
     ax.set_aspect("equal")
     ax.legend(fontsize=8, loc="upper right")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def placement_figure(result: PlacementResult, target_m: np.ndarray, kind: str, path: Path) -> Path:
@@ -187,7 +182,7 @@ def placement_figure(result: PlacementResult, target_m: np.ndarray, kind: str, p
     )
     ax.set_aspect("equal")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def correlation_figure(estimate: DelayEstimate, path: Path, names: tuple[str, str] = ("A", "B")) -> Path:
@@ -203,4 +198,4 @@ def correlation_figure(estimate: DelayEstimate, path: Path, names: tuple[str, st
         f"(peak ratio {estimate.peak_ratio:.2f})",
     )
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
