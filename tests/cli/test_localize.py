@@ -18,6 +18,11 @@ KEYS = {
     "pings_used",
     "pings_excluded",
     "residual_rms_m",
+    "gradient_e_per_km",
+    "gradient_n_per_km",
+    "refraction_ppm",
+    "sigma_path_m",
+    "beta_m",
 }
 
 

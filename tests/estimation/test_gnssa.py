@@ -21,6 +21,7 @@ from oceanloc.models.measurements import (
 )
 
 TRUTH = np.array([1.0, -2.0, 0.0])
+
 coord = st.floats(-200, 200, allow_nan=False)
 
 
@@ -61,7 +62,15 @@ def test_turnaround_adds_and_gnss_sigma_projects_on_both_lines_of_sight():
 
 
 def synthetic_survey(
-    rng, n=300, radius=(20.0, 150.0), drift_mps=2.0, beta=0.0, sigma_path=0.02, one_side=False
+    rng,
+    n=300,
+    radius=(20.0, 150.0),
+    drift_mps=2.0,
+    beta=0.0,
+    sigma_path=0.02,
+    one_side=False,
+    gradient_per_km=(0.0, 0.0),
+    kappa_ppm=0.0,
 ):
     """Wave-Glider-like survey over TRUTH: transducer at U ~ 50 m, GNSS sigma 1.5 cm, c drifting in time."""
     t = np.arange(n) * 10.0
@@ -71,7 +80,13 @@ def synthetic_survey(
     rx = tx + np.array([0.3, 0.1, 0.0]) + 0.05 * rng.standard_normal((n, 3))
     sig = np.full((n, 3), 0.015)
     c_true = 1500.0 + drift_mps * (t - t.mean()) / np.ptp(t)
-    path = np.linalg.norm(TRUTH - tx, axis=1) + np.linalg.norm(TRUTH - rx, axis=1)
+    path = np.zeros(n)
+    for leg in (tx, rx):
+        length = np.linalg.norm(leg - TRUTH, axis=1)
+        horiz = leg[:, :2] - TRUTH[:2]
+        tan2 = np.sum(horiz**2, axis=1) / (leg[:, 2] - TRUTH[2]) ** 2
+        # refraction shortens by kappa L tan^2; slowness 1 + g.x_h averages g.horiz/2 along the leg
+        path += length * (1.0 - 1e-6 * kappa_ppm * tan2 + 0.5e-3 * horiz @ np.asarray(gradient_per_km))
     tan_inc = np.hypot(*(tx[:, :2] - TRUTH[:2]).T) / (tx[:, 2] - TRUTH[2])
     noise = rng.standard_normal(n) * np.sqrt(sigma_path**2 + (beta * tan_inc) ** 2)
     # GNSS errors: what the file reports is the true position plus its error
@@ -99,13 +114,22 @@ def test_problem_jacobian_matches_finite_differences_with_sound_speed_knots():
     knots = np.array([0.0, 200.0, 390.0])
     basis = hat_basis(s.t_transmit_s, knots)
     problem = GnssaProblem(
-        s.transmit_enu_m, s.receive_enu_m, s.twtt_s, basis, np.full(40, 0.03), np.ones((1, 40), bool), 1500.0
+        s.transmit_enu_m,
+        s.receive_enu_m,
+        s.twtt_s,
+        basis,
+        np.full(40, 0.03),
+        np.ones((1, 40), bool),
+        1500.0,
+        gradient=True,
+        refraction=True,
     )
-    x = np.array([[0.5, -1.0, 0.3, 1499.0, 1501.0, 1500.5]])
+    # E, N, U, g_E, g_N (per km), kappa (ppm), three knots
+    x = np.array([[0.5, -1.0, 0.3, 2e-3, -1e-3, 8.0, 1499.0, 1501.0, 1500.5]])
     _, jac = problem.evaluate(x, np.array([0]))
     fd = np.empty_like(jac)
-    for k in range(6):
-        h = np.zeros((1, 6))
+    for k in range(x.shape[1]):
+        h = np.zeros((1, x.shape[1]))
         h[0, k] = 1e-4
         rp, _ = problem.evaluate(x + h, np.array([0]))
         rm, _ = problem.evaluate(x - h, np.array([0]))
@@ -183,18 +207,66 @@ def test_options_are_validated():
 
 def test_real_surveys_agree_within_the_acceptance_spread():
     # Measured with the defaults (sound speed piecewise linear every 15 min, prior 3 m/s around the
-    # published value): std across the five surveys E 2.2 cm, N 3.7 cm, U 2.9 cm. The issue's target is
-    # E 2.5, N 3.5, U 6 cm; north misses it by 0.2 cm (see the README), so north is held at 4 cm here.
+    # published value; horizontal slowness gradient, prior 1e-3 per km): std across the five surveys
+    # E 1.6 cm, N 3.3 cm, U 3.2 cm against the issue's targets E 2.5, N 3.5, U 6 cm.
     results = [
         localize_gnssa(read_gnssa(p), GnssaOptions(sound_speed_mps=published_sound_speed_mps(p)))
         for p in lajolla_paths()
     ]
     spread = survey_spread(results)
-    assert spread.std_enu_m[0] <= 0.025
-    assert spread.std_enu_m[1] <= 0.04
-    assert spread.std_enu_m[2] <= 0.06
+    np.testing.assert_array_less(spread.std_enu_m, [0.025, 0.035, 0.06])
+    # The sigmas (formal + jackknife + survey-wide GNSS) explain the east and up spread; north stays
+    # outside its 95% chi-square range because 2022-03-21 sits ~7 cm north in every quarter of its track.
+    assert spread.sigmas_explain_spread.tolist() == [True, False, True]
     for r in results:
         assert np.all(np.abs(r.position_enu_m) < 0.2)  # the transponder is at the frame's origin (~cm)
         assert 1490 < r.sound_speed_mps < 1510
     gross = [e for r in results for e in r.exclusions if e.reason.startswith("gross")]
     assert [(e.line, round(e.residual_m)) for e in gross][:1] == [(57, 1726)]
+
+
+def test_a_horizontal_sound_speed_gradient_is_estimated_on_a_one_sided_survey():
+    # Far pings on one side with a gradient of 3e-3 per km (4.5 m/s per km): ignoring it biases the
+    # horizontal position by centimetres; estimating it (prior 1e-3 per km, so the prior pulls it down a
+    # little) leaves the error inside 3 sigma of the formal covariance on each of 6 seeded surveys, and
+    # the RMS horizontal error falls by more than half.
+    err_g, err_0 = [], []
+    for seed in range(6):
+        s = synthetic_survey(
+            np.random.default_rng(300 + seed), radius=(5.0, 250.0), one_side=True, gradient_per_km=(0.0, 3e-3)
+        )
+        g = localize_gnssa(s, GnssaOptions(sound_speed_mps=1500.0, jackknife_blocks=0))
+        z = localize_gnssa(
+            s, GnssaOptions(sound_speed_mps=1500.0, jackknife_blocks=0, estimate_gradient=False)
+        )
+        e = g.position_enu_m - TRUTH
+        assert e @ np.linalg.solve(g.covariance_formal_m2, e) < 14.2  # chi-square(3) 99.7 %
+        assert g.gradient_per_km[1] > 1e-3
+        err_g.append(np.hypot(*e[:2]))
+        err_0.append(np.hypot(*(z.position_enu_m - TRUTH)[:2]))
+    assert np.sqrt(np.mean(np.square(err_g))) < 0.5 * np.sqrt(np.mean(np.square(err_0)))
+
+
+def test_refraction_coefficient_is_recovered_when_estimated():
+    # kappa = 8 ppm (20 m/s across the column): recovered within 3 of its formal sigmas on average.
+    s = synthetic_survey(np.random.default_rng(9), n=600, radius=(5.0, 250.0), kappa_ppm=8.0, drift_mps=0.0)
+    r = localize_gnssa(
+        s,
+        GnssaOptions(
+            sound_speed_mps=1500.0, jackknife_blocks=0, estimate_refraction=True, knot_spacing_s=None
+        ),
+    )
+    assert 4.0 < r.refraction_ppm < 12.0
+    assert np.all(np.abs(r.position_enu_m - TRUTH) < 4 * np.sqrt(np.diag(r.covariance_formal_m2)))
+
+
+def test_survey_wide_gnss_error_is_added_to_the_reported_covariance():
+    s = synthetic_survey(np.random.default_rng(2))
+    with_floor = localize_gnssa(s, GnssaOptions(sound_speed_mps=1500.0, jackknife_blocks=0))
+    without = localize_gnssa(
+        s, GnssaOptions(sound_speed_mps=1500.0, jackknife_blocks=0, gnss_common_mode=False)
+    )
+    np.testing.assert_allclose(with_floor.covariance_gnss_m2, np.diag([0.015**2] * 3))
+    np.testing.assert_allclose(
+        with_floor.covariance_m2, without.covariance_m2 + with_floor.covariance_gnss_m2, rtol=1e-9
+    )

@@ -1,14 +1,21 @@
-"""Sound speed (thesis eq. II.1 against TEOS-10) and travel time <-> range."""
+"""Sound speed (thesis eq. II.1 against TEOS-10), travel time <-> range, straight-ray corrections."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.models.acoustics import (
+    gradient_path_jacobian,
+    gradient_path_m2,
     harmonic_mean_sound_speed_mps,
     range_from_travel_time_m,
+    refraction_shortening_jacobian,
+    refraction_shortening_m,
     sound_speed_medwin_mps,
     sound_speed_teos10_mps,
+    trace_layered_ray,
     travel_time_from_range_s,
 )
 
@@ -68,3 +75,56 @@ def test_bad_profiles():
         harmonic_mean_sound_speed_mps([0.0, 5.0, 5.0], [1500.0, 1500.0, 1501.0])
     with pytest.raises(ConfigError, match="deeper"):
         harmonic_mean_sound_speed_mps([0.0, 5.0], [1500.0, 1500.0], 5.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    "profile",
+    [
+        lambda z: 1515.0 - 20.0 * z / 53.0,  # linear
+        lambda z: 1500.0 + 15.0 / (1.0 + np.exp((z - 20.0) / 4.0)),  # thermocline at 20 m
+        lambda z: np.where(z < 10.0, 1512.0, 1512.0 - 0.4 * (z - 10.0)),  # mixed layer over a gradient
+    ],
+)
+def test_refraction_shortening_matches_a_layered_ray_trace(profile):
+    # The straight ray at the harmonic-mean speed is exact to first order (Fermat); the second-order
+    # shortening of the equivalent path is kappa L tan^2 with kappa = Var_z(c) / (2 c^2) within 10 %,
+    # whatever the profile's shape, up to tan(incidence) = 5.
+    depth = 53.0
+    edges = np.linspace(0.0, depth, 2001)
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    c = profile(mid)
+    c_h = depth / np.sum(np.diff(edges) / c)
+    tan = np.array([0.5, 1.0, 2.0, 3.0, 4.0, 5.0])
+    t_s, reach_m = trace_layered_ray(c, np.diff(edges), tan)
+    np.testing.assert_allclose(reach_m, tan * depth, rtol=1e-9)
+    target = np.zeros((tan.size, 3))
+    sensor = np.stack([tan * depth, np.zeros_like(tan), np.full_like(tan, depth)], axis=1)
+    shortening = c_h * t_s - np.linalg.norm(sensor, axis=1)
+    kappa = np.var(c) / (2.0 * np.mean(c) ** 2)
+    np.testing.assert_allclose(-shortening, kappa * refraction_shortening_m(target, sensor), rtol=0.1)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(-300, 300), st.floats(-300, 300), st.floats(20, 80), st.floats(-5, 5), st.floats(-5, 5))
+def test_refraction_and_gradient_jacobians_match_central_differences(e, n, up, te, tn):
+    target = np.array([te, tn, 0.0])
+    sensor = np.array([e, n, up])
+    h = 1e-5
+    for fn, jac in (
+        (refraction_shortening_m, refraction_shortening_jacobian),
+        (gradient_path_m2, gradient_path_jacobian),
+    ):
+        fd = np.stack(
+            [(fn(target + h * d, sensor) - fn(target - h * d, sensor)) / (2 * h) for d in np.eye(3)], axis=-1
+        )
+        np.testing.assert_allclose(jac(target, sensor), fd, rtol=1e-5, atol=1e-6)
+
+
+def test_gradient_factor_is_half_the_offset_times_the_slant_range():
+    sensor = np.array([30.0, 40.0, 120.0])  # L = 130
+    np.testing.assert_allclose(gradient_path_m2(np.zeros(3), sensor), [0.5 * 130 * 30, 0.5 * 130 * 40])
+
+
+def test_ray_trace_rejects_mismatched_layers():
+    with pytest.raises(ConfigError, match="one positive thickness"):
+        trace_layered_ray([1500.0, 1501.0], [10.0], [1.0])

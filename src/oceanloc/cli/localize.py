@@ -51,6 +51,19 @@ def gnssa(
         typer.Option(help="Elevation cut: drop pings farther than this many depths horizontally (0: off)."),
     ] = 0.0,
     outlier_threshold: Annotated[float, typer.Option(help="Normalized-residual outlier threshold.")] = 3.0,
+    gradient: Annotated[
+        bool, typer.Option(help="Estimate a horizontal sound-speed (slowness) gradient, east and north.")
+    ] = True,
+    sigma_gradient: Annotated[
+        float, typer.Option(help="Prior 1-sigma of each gradient component, relative change per km.")
+    ] = 1e-3,
+    refraction: Annotated[
+        bool, typer.Option(help="Estimate the ray-bending coefficient kappa of L (1 - kappa tan^2).")
+    ] = False,
+    gnss_common_mode: Annotated[
+        bool,
+        typer.Option(help="Add the survey-wide (time-correlated) GNSS error to the reported sigmas."),
+    ] = True,
     json_path: Annotated[Path | None, typer.Option("--json", help="Write the results as JSON here.")] = None,
     figures: Annotated[
         Path | None, typer.Option("--figures", help="Write residual figures (PNG) in this folder.")
@@ -74,6 +87,10 @@ def gnssa(
             knot_spacing_s=knot_spacing if knot_spacing > 0 else None,
             max_tan_incidence=max_tan_incidence if max_tan_incidence > 0 else None,
             outlier_threshold=outlier_threshold,
+            estimate_gradient=gradient,
+            sigma_gradient_per_km=sigma_gradient,
+            estimate_refraction=refraction,
+            gnss_common_mode=gnss_common_mode,
         )
         surveys.append(survey)
         results.append(localize_gnssa(survey, opts))
@@ -117,6 +134,11 @@ def gnssa_json(results: list[GnssaResult]) -> dict:
                 "pings_used": r.pings_used,
                 "pings_excluded": len(r.exclusions),
                 "residual_rms_m": r.residual_rms_m,
+                "gradient_e_per_km": r.gradient_per_km[0],
+                "gradient_n_per_km": r.gradient_per_km[1],
+                "refraction_ppm": r.refraction_ppm,
+                "sigma_path_m": r.sigma_path_m,
+                "beta_m": r.beta_m,
             }
         )
     payload: dict = {"surveys": surveys}
@@ -146,8 +168,11 @@ def _speeds(paths: list[Path], given: list[float]) -> list[float]:
 
 def _print_results(results: list[GnssaResult]) -> None:
     table = Table(title="GNSS-A transponder positions (file frame)")
-    for col in ("survey", "N m", "E m", "U m", "1σ N/E/U cm", "c m/s", "used/excl", "RMS cm"):
+    for col in ("survey", "N m", "E m", "U m", "1σ N/E/U cm", "used/excl", "RMS cm"):
         table.add_column(col, justify="right")
+    acoustic = Table(title="Acoustic model (estimated)")
+    for col in ("survey", "c m/s", "dc/dE, dc/dN m/s/km", "κ ppm", "σ path cm", "β cm/tan"):
+        acoustic.add_column(col, justify="right")
     geo_table = Table(title="As latitude, longitude, ellipsoidal height (WGS84)")
     for col in ("survey", "latitude deg", "longitude deg", "height m"):
         geo_table.add_column(col, justify="right")
@@ -161,14 +186,24 @@ def _print_results(results: list[GnssaResult]) -> None:
             f"{e:+.3f}",
             f"{u:+.3f}",
             f"{sn:.1f}/{se:.1f}/{su:.1f}",
-            f"{r.sound_speed_mps:.1f}",
             f"{r.pings_used}/{len(r.exclusions)}",
             f"{100 * r.residual_rms_m:.1f}",
+        )
+        # a relative slowness gradient g per km is a speed gradient of -g c per km
+        dc = -r.gradient_per_km * r.sound_speed_mps
+        acoustic.add_row(
+            name,
+            f"{r.sound_speed_mps:.1f}",
+            f"{dc[0]:+.2f}, {dc[1]:+.2f}",
+            f"{r.refraction_ppm:.1f}",
+            f"{100 * r.sigma_path_m:.1f}",
+            f"{100 * r.beta_m:.2f}",
         )
         if r.position_geodetic is not None:
             lat, lon, h = r.position_geodetic
             geo_table.add_row(name, f"{lat:.8f}", f"{lon:.8f}", f"{h:.3f}")
     console.print(table)
+    console.print(acoustic)
     if geo_table.row_count:
         console.print(geo_table)
 

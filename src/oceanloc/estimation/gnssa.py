@@ -34,6 +34,7 @@ the reported covariance is the formal one plus the positive part of (jackknife -
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +45,12 @@ from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
 from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.models.acoustics import (
+    gradient_path_jacobian,
+    gradient_path_m2,
+    refraction_shortening_jacobian,
+    refraction_shortening_m,
+)
 from oceanloc.models.measurements import (
     range_jacobian,
     two_way_range_jacobian,
@@ -85,6 +92,19 @@ class GnssaOptions:
         Turn-around delay still in the TWTT (0 for files that removed it), seconds.
     jackknife_blocks : int
         Number of contiguous time blocks for the jackknife covariance (0 disables it).
+    estimate_gradient : bool
+        Estimate a horizontal gradient of slowness ``(g_E, g_N)``, relative change per kilometre
+        (:func:`~oceanloc.models.acoustics.gradient_path_m2`).
+    sigma_gradient_per_km : float
+        Prior standard deviation of each gradient component around zero, per kilometre (1e-3: about
+        1.5 m/s of depth-averaged sound speed per kilometre).
+    estimate_refraction : bool
+        Estimate the refraction coefficient ``kappa`` of the straight-ray correction
+        ``L (1 - kappa tan^2 theta)`` per leg (:func:`~oceanloc.models.acoustics.refraction_shortening_m`).
+    sigma_refraction_ppm : float
+        Prior standard deviation of ``kappa`` around zero, parts per million.
+    gnss_common_mode : bool
+        Add the survey-wide GNSS error (the mean per-ping GNSS covariance) to the reported covariance.
     """
 
     sound_speed_mps: float
@@ -101,6 +121,11 @@ class GnssaOptions:
     sigma_position_prior_m: float = 1000.0
     turnaround_s: float = 0.0
     jackknife_blocks: int = 10
+    estimate_gradient: bool = True
+    sigma_gradient_per_km: float = 1e-3
+    estimate_refraction: bool = False
+    sigma_refraction_ppm: float = 30.0
+    gnss_common_mode: bool = True
 
     def __post_init__(self) -> None:
         if not (1300.0 <= self.sound_speed_mps <= 1700.0):
@@ -117,6 +142,10 @@ class GnssaOptions:
             raise ConfigError("max_tan_incidence must be positive")
         if self.jackknife_blocks == 1 or self.jackknife_blocks < 0:
             raise ConfigError("jackknife_blocks must be 0 (off) or at least 2")
+        if self.sigma_refraction_ppm <= 0.0:
+            raise ConfigError("sigma_refraction_ppm must be positive")
+        if self.sigma_gradient_per_km <= 0.0:
+            raise ConfigError("sigma_gradient_per_km must be positive")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -171,6 +200,13 @@ class GnssaResult:
         Estimated path noise (timing and unmodelled propagation), metres of two-way path.
     beta_m : float
         Estimated far-ping noise per unit tan(incidence), metres.
+    gradient_per_km : (2,) float
+        Estimated horizontal slowness gradient (east, north), relative change per kilometre (zeros when
+        not estimated).
+    refraction_ppm : float
+        Estimated refraction coefficient ``kappa`` (0 when not estimated), parts per million.
+    covariance_gnss_m2 : (3, 3) float
+        The survey-wide GNSS part of :attr:`covariance_m2` (zeros when not added).
     converged : bool
     """
 
@@ -190,6 +226,9 @@ class GnssaResult:
     residual_rms_m: float
     sigma_path_m: float
     beta_m: float
+    gradient_per_km: FloatArray
+    refraction_ppm: float
+    covariance_gnss_m2: FloatArray
     converged: bool
 
     @property
@@ -206,9 +245,12 @@ class GnssaResult:
 class GnssaProblem:
     """A batch of GNSS-A MAP problems sharing the pings, differing in which pings they use.
 
-    State ``x = (E, N, U, c_1, ..., c_K)``; with ``K = 0`` the sound speed is fixed at ``fixed_speed``.
-    Residuals are in travel time, whitened by ``sigma_m / c0`` with the nominal speed ``c0`` (a constant
-    weight, so the cost is an ordinary weighted least-squares cost in travel time).
+    State ``x = (E, N, U, [g_E, g_N], [kappa], c_1, ..., c_K)``: the transponder, optionally the
+    horizontal slowness gradient (per kilometre, :func:`~oceanloc.models.acoustics.gradient_path_m2`) and
+    the refraction coefficient (ppm, :func:`~oceanloc.models.acoustics.refraction_shortening_m`), then the
+    sound-speed knots; with ``K = 0`` the sound speed is fixed at ``fixed_speed``. Residuals are in
+    travel time, whitened by ``sigma_m / c0`` with the nominal speed ``c0`` (a constant weight, so the
+    cost is an ordinary weighted least-squares cost in travel time).
 
     Attributes
     ----------
@@ -222,6 +264,10 @@ class GnssaProblem:
     mask : (B, n) bool
     fixed_speed : float
         The nominal (prior) speed: the fixed speed when ``K = 0`` and the whitening speed ``c0``.
+    gradient : bool
+        The state holds the horizontal slowness gradient.
+    refraction : bool
+        The state holds the refraction coefficient.
     """
 
     transmit_m: FloatArray
@@ -231,29 +277,76 @@ class GnssaProblem:
     sigma_m: FloatArray
     mask: BoolArray
     fixed_speed: float
+    gradient: bool = False
+    refraction: bool = False
 
     @property
     def batch_size(self) -> int:
         return int(self.mask.shape[0])
 
+    @property
+    def first_knot(self) -> int:
+        """Index of the first sound-speed knot in the state."""
+        return 3 + 2 * int(self.gradient) + int(self.refraction)
+
     def speed(self, x: FloatArray) -> FloatArray:
         """Sound speed at each ping, ``(b, n)``."""
         if self.basis.shape[1] == 0:
             return np.full((x.shape[0], self.twtt_s.shape[0]), self.fixed_speed)
-        return x[:, 3:] @ self.basis.T
+        return x[:, self.first_knot :] @ self.basis.T
+
+    def path(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Modelled two-way acoustic path at the states ``x``.
+
+        Returns
+        -------
+        path : (b, n) float
+            Equivalent path length (straight legs, corrected for gradient and refraction), metres.
+        d_target : (b, n, 3) float
+            Its Jacobian on the transponder position.
+        d_nuisance : (b, n, q) float
+            Its Jacobian on the gradient and refraction parameters (``q`` = 0 to 3).
+        """
+        target = x[:, None, :3]
+        legs = (self.transmit_m, self.receive_m)
+        path = two_way_range_m(target, *legs)
+        d_target = two_way_range_jacobian(target, *legs)
+        nuisance = []
+        col = 3
+        if self.gradient:
+            g = 1e-3 * x[:, None, col : col + 2]
+            factor = sum(gradient_path_m2(target, leg) for leg in legs)
+            jac = sum(gradient_path_jacobian(target, leg) for leg in legs)
+            path = path + np.sum(g * factor, axis=-1)
+            d_target = d_target + np.einsum("bnk,bnkj->bnj", g, jac)
+            nuisance.append(1e-3 * factor)
+            col += 2
+        if self.refraction:
+            kappa = 1e-6 * x[:, col, None]
+            short = sum(refraction_shortening_m(target, leg) for leg in legs)
+            jac = sum(refraction_shortening_jacobian(target, leg) for leg in legs)
+            path = path - kappa * short
+            d_target = d_target - kappa[..., None] * jac
+            nuisance.append(-1e-6 * short[..., None])
+        d_nuisance = np.concatenate(nuisance, axis=-1) if nuisance else np.zeros((*path.shape, 0))
+        return path, d_target, d_nuisance
 
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
-        target = x[:, None, :3]
-        path = two_way_range_m(target, self.transmit_m, self.receive_m)
+        path, d_target, d_nuisance = self.path(x)
         c = self.speed(x)
         weight = np.where(self.mask[rows], self.fixed_speed / self.sigma_m, 0.0)
         resid = (self.twtt_s - path / c) * weight
-        d_pos = two_way_range_jacobian(target, self.transmit_m, self.receive_m) / c[..., None]
+        k0 = self.first_knot
         jac = np.empty((x.shape[0], self.twtt_s.shape[0], x.shape[1]))
-        jac[..., :3] = d_pos
-        if x.shape[1] > 3:
-            jac[..., 3:] = (-path / (c * c))[..., None] * self.basis
+        jac[..., :3] = d_target / c[..., None]
+        jac[..., 3:k0] = d_nuisance / c[..., None]
+        if x.shape[1] > k0:
+            jac[..., k0:] = (-path / (c * c))[..., None] * self.basis
         return resid, jac * weight[..., None]
+
+    def with_mask(self, mask: BoolArray, sigma_m: FloatArray | None = None) -> GnssaProblem:
+        """The same problem with other ping masks ``(B, n)`` (and optionally other sigmas)."""
+        return dataclasses.replace(self, mask=mask, sigma_m=self.sigma_m if sigma_m is None else sigma_m)
 
 
 def sound_speed_knots(t_s: FloatArray, options: GnssaOptions) -> FloatArray:
@@ -300,15 +393,32 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     knots = sound_speed_knots(t_mid, options)
     basis = hat_basis(t_mid, knots)
     n_knots = knots.size
-    dim = 3 + n_knots
+    template = GnssaProblem(
+        tx,
+        rx,
+        twtt,
+        basis,
+        np.ones(n),
+        np.ones((1, n), dtype=bool),
+        options.sound_speed_mps,
+        gradient=options.estimate_gradient,
+        refraction=options.estimate_refraction,
+    )
+    k0 = template.first_knot
+    dim = k0 + n_knots
 
     x0 = _initial_guess(tx, twtt, options.sound_speed_mps)
-    prior_mean = np.concatenate([x0, np.full(n_knots, options.sound_speed_mps)])[None, :]
+    prior_mean = np.concatenate([x0, np.zeros(k0 - 3), np.full(n_knots, options.sound_speed_mps)])[None, :]
+    prior_var = [options.sigma_position_prior_m**2] * 3
+    if options.estimate_gradient:
+        prior_var += [options.sigma_gradient_per_km**2] * 2
+    if options.estimate_refraction:
+        prior_var += [options.sigma_refraction_ppm**2]
     prior_cov = np.zeros((dim, dim))
-    prior_cov[:3, :3] = np.eye(3) * options.sigma_position_prior_m**2
+    prior_cov[:k0, :k0] = np.diag(prior_var)
     if n_knots:
         lag = np.abs(knots[:, None] - knots[None, :])
-        prior_cov[3:, 3:] = options.sigma_sound_speed_mps**2 * np.exp(
+        prior_cov[k0:, k0:] = options.sigma_sound_speed_mps**2 * np.exp(
             -lag / options.sound_speed_correlation_s
         )
     prior = GaussianPrior(mean=prior_mean, cov=prior_cov)
@@ -344,7 +454,7 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         result = None
         for _ in range(3):
             sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * tan_inc) ** 2)
-            problem = GnssaProblem(tx, rx, twtt, basis, sigma, used[None, :], options.sound_speed_mps)
+            problem = template.with_mask(used[None, :], sigma)
             result = solve_map(problem, prior, map_opts, initial=x)
             x = result.estimate
             resid = _path_residual(problem, x)[0]
@@ -371,10 +481,12 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
             )
         )
 
-    problem = GnssaProblem(tx, rx, twtt, basis, sigma, used[None, :], options.sound_speed_mps)
+    problem = template.with_mask(used[None, :], sigma)
     cov_formal = result.covariance[0, :3, :3]
     cov_jk = _jackknife(problem, prior, map_opts, x, t_mid, used, options.jackknife_blocks)
     cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
+    cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
+    cov = cov + cov_gnss
     resid = _path_residual(problem, x)[0]
     speed = problem.speed(x)[0]
     geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
@@ -386,7 +498,10 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         covariance_jackknife_m2=cov_jk,
         position_geodetic=geodetic,
         knot_times_s=knots,
-        sound_speed_knots_mps=x[0, 3:].copy(),
+        sound_speed_knots_mps=x[0, k0:].copy(),
+        gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),
+        refraction_ppm=float(x[0, k0 - 1]) if options.estimate_refraction else 0.0,
+        covariance_gnss_m2=cov_gnss,
         sound_speed_mps=float(np.mean(speed[used])),
         used=used,
         exclusions=tuple(exclusions),
@@ -418,8 +533,7 @@ def _gnss_variance(target: FloatArray, survey: GnssaSurvey) -> tuple[FloatArray,
 
 def _path_residual(problem: GnssaProblem, x: FloatArray) -> FloatArray:
     """``c(t) TWTT - path`` in metres, ``(b, n)``."""
-    path = two_way_range_m(x[:, None, :3], problem.transmit_m, problem.receive_m)
-    return problem.speed(x) * problem.twtt_s - path
+    return problem.speed(x) * problem.twtt_s - problem.path(x)[0]
 
 
 def _variance_components(
@@ -455,19 +569,23 @@ def _jackknife(
     block_of = np.empty(problem.twtt_s.size, dtype=np.int64)
     block_of[order] = np.arange(order.size) * blocks // order.size
     masks = np.stack([used & (block_of != g) for g in range(blocks)])
-    batch = GnssaProblem(
-        problem.transmit_m,
-        problem.receive_m,
-        problem.twtt_s,
-        problem.basis,
-        problem.sigma_m,
-        masks,
-        problem.fixed_speed,
-    )
+    batch = problem.with_mask(masks)
     rep_prior = GaussianPrior(mean=np.repeat(prior.mean, blocks, axis=0), cov=prior.cov)
     reps = solve_map(batch, rep_prior, map_opts, initial=np.repeat(x, blocks, axis=0)).estimate[:, :3]
     dev = reps - reps.mean(axis=0)
     return (blocks - 1) / blocks * dev.T @ dev
+
+
+def _gnss_common_mode(survey: GnssaSurvey, used: BoolArray) -> FloatArray:
+    """Covariance of the survey-wide GNSS error: the mean per-ping GNSS variance of the used pings.
+
+    Kinematic GNSS errors (troposphere, orbits and clocks, multipath, antenna phase centre) are
+    correlated over hours, longer than a survey, so their common part shifts the whole surface track and
+    the transponder with it, one for one, and no number of pings averages it down. The full per-ping
+    variance is the limit of full correlation.
+    """
+    var = 0.5 * (survey.sigma_transmit_enu_m[used] ** 2 + survey.sigma_receive_enu_m[used] ** 2)
+    return np.diag(np.mean(var, axis=0))
 
 
 def _positive_part(matrix: FloatArray) -> FloatArray:
