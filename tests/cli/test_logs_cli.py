@@ -1,9 +1,11 @@
 import json
 from pathlib import Path
 
+import numpy as np
+import pytest
 from typer.testing import CliRunner
 
-from oceanloc.cli.app import app
+from oceanloc.cli.app import app, main
 
 
 def test_simulate_then_localize_logs(tmp_path: Path):
@@ -19,3 +21,25 @@ def test_simulate_then_localize_logs(tmp_path: Path):
     data = json.loads(out.read_text())
     assert [b["beacon"] for b in data["beacons"]] == [1, 2]
     assert sum(data["qc"].values()) == 10
+
+
+def test_localize_noise_prints_eq30_and_the_total_sigma(tmp_path: Path, capsys):
+    runner = CliRunner()
+    assert (
+        runner.invoke(app, ["simulate", "logs", "--out", str(tmp_path), "--duration", "900"]).exit_code == 0
+    )
+    out = tmp_path / "noise.json"
+    args = ["localize", "noise", str(tmp_path / "gps.nmea"), str(tmp_path / "ranges.csv")]
+    res = runner.invoke(app, [*args, "--json", str(out), "--figures", str(tmp_path / "fig")])
+    assert res.exit_code == 0, res.output
+    assert "Range noise on stationary segments" in res.output and "total range" in res.output
+    data = json.loads(out.read_text())
+    assert [b["beacon"] for b in data["beacons"]] == [1, 2]
+    # the simulated USBL sigmas are 62 and 113 mm; one seeded log is within 25 % (SE ~6 % each)
+    assert 0.045 < data["beacons"][0]["sigma_m"] < 0.078 and 0.085 < data["beacons"][1]["sigma_m"] < 0.14
+    assert abs(data["sigma_total_m"] - np.hypot(data["sigma_usbl_m"], 1.0)) < 1e-12
+    assert (tmp_path / "fig" / "range_noise.png").stat().st_size > 10_000
+    with pytest.raises(SystemExit) as exc:
+        main([*args, "--min-duration", "5000"])
+    assert exc.value.code == 2
+    assert "no beacon has 10 or more ranges" in " ".join(capsys.readouterr().err.split())

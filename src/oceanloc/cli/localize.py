@@ -289,3 +289,98 @@ def logs(
         write_json(
             json_path, {"beacons": payload, "qc": qc.counts(), "dropped_no_gps": aligned.dropped_no_gps}
         )
+
+
+@app.command("noise")
+def noise(
+    gps: Annotated[Path, typer.Argument(help="NMEA 0183 GPS log (GGA with RMC or ZDA dates).")],
+    ranges: Annotated[Path, typer.Argument(help="USBL range CSV (utc,beacon,range_m|owtt_s|twtt_s).")],
+    sound_speed: Annotated[float, typer.Option(help="Sound speed for travel-time columns, m/s.")] = 1500.0,
+    sigma_gps: Annotated[
+        float, typer.Option(help="GPS error projected on the line of sight, m (journal VI-B: 1 m DGPS).")
+    ] = 1.0,
+    max_speed: Annotated[
+        float, typer.Option(help="Stationary: slower than this over the window, m/s.")
+    ] = 0.3,
+    window: Annotated[float, typer.Option(help="Stationary-test window, s.")] = 30.0,
+    min_duration: Annotated[float, typer.Option(help="Shortest stationary segment analysed, s.")] = 120.0,
+    max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate across, s.")] = 2.0,
+    json_path: Annotated[
+        Path | None, typer.Option("--json", help="Write the estimates as JSON here.")
+    ] = None,
+    figures: Annotated[
+        Path | None, typer.Option("--figures", help="Write the running-estimate figure (PNG) here.")
+    ] = None,
+) -> None:
+    """Range noise per beacon on the stationary segments (PLANS eq. 30) and the total sigma with GPS error."""
+    from oceanloc.estimation.noise import (
+        stationary_mask,
+        stationary_range_noise,
+        stationary_segments,
+        total_range_sigma_m,
+    )
+    from oceanloc.io.nmea import read_nmea
+    from oceanloc.io.usbl import align_ranges, format_utc, read_usbl
+
+    if sigma_gps < 0.0 or max_speed <= 0.0 or window <= 0.0:
+        raise ConfigError("--sigma-gps must be >= 0, --max-speed and --window positive")
+    gps_log = read_nmea(gps)
+    range_log = read_usbl(ranges, sound_speed_mps=sound_speed)
+    qc = gps_log.qc.merge(range_log.qc)
+    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
+    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap)
+    still = stationary_mask(aligned.t_unix_s, aligned.vehicle_enu_m, max_speed_mps=max_speed, window_s=window)
+    segments = stationary_segments(aligned.t_unix_s, still, min_duration_s=min_duration)
+    estimates = stationary_range_noise(aligned.t_unix_s, aligned.beacon, aligned.range_m, segments)
+    if not estimates:
+        raise ConfigError(
+            f"{ranges}: no beacon has 10 or more ranges on a stationary segment of {min_duration:g} s or more"
+        )
+    t0 = aligned.t_unix_s[0]
+    table = Table(title="Range noise on stationary segments (eq. 30)")
+    for col in ("beacon", "segment s", "ranges", "outliers", "range m", "σ mm", "± mm"):
+        table.add_column(col, justify="right")
+    for e in estimates:
+        table.add_row(
+            str(e.beacon),
+            f"{e.t_start_s - t0:.0f}-{e.t_end_s - t0:.0f}",
+            str(e.n_ranges),
+            str(e.n_outliers),
+            f"{e.running.final_range_m:.3f}",
+            f"{1e3 * e.sigma_m:.0f}",
+            f"{1e3 * e.sigma_se_m:.0f}",
+        )
+    console.print(table)
+    sigma_usbl = max(e.sigma_m for e in estimates)
+    total = total_range_sigma_m(sigma_usbl, sigma_gps)
+    console.print(
+        f"sigma_USBL = max over beacons = {1e3 * sigma_usbl:.0f} mm; with sigma_GPS = {sigma_gps:g} m the"
+        f" total range sigma is {total:.3f} m (journal VI-B); use it as --sigma-range"
+    )
+    if figures is not None:
+        from oceanloc.report.field_figures import range_noise_figure
+
+        err_console.print(f"wrote {range_noise_figure(estimates, ensure_dir(figures) / 'range_noise.png')}")
+    if json_path is not None:
+        write_json(
+            json_path,
+            {
+                "beacons": [
+                    {
+                        "beacon": e.beacon,
+                        "segment": e.segment,
+                        "t_start_utc": format_utc(e.t_start_s),
+                        "t_end_utc": format_utc(e.t_end_s),
+                        "stationary_ranges": e.n_ranges,
+                        "outliers": e.n_outliers,
+                        "range_m": e.running.final_range_m,
+                        "sigma_m": e.sigma_m,
+                        "sigma_se_m": e.sigma_se_m,
+                    }
+                    for e in estimates
+                ],
+                "sigma_usbl_m": sigma_usbl,
+                "sigma_gps_m": sigma_gps,
+                "sigma_total_m": total,
+            },
+        )

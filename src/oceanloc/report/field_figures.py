@@ -9,9 +9,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from oceanloc.estimation.gnssa import GnssaResult
+from oceanloc.estimation.noise import StationaryNoise
 from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.report._figures import save_figure
 
 
 def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) -> Path:
@@ -82,6 +85,40 @@ def gnssa_spread_figure(results: list[GnssaResult], path: Path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def range_noise_figure(noise: list[StationaryNoise], path: Path) -> Path:
+    """Running range and noise estimates of eq. (30) per beacon, with +-1 standard error (PLANS Fig. 5)."""
+    fig = Figure(figsize=(10, 3.6 * len(noise)))
+    axes = fig.subplots(len(noise), 2, squeeze=False)
+    for (ax_r, ax_s), est in zip(axes, noise, strict=True):
+        run = est.running
+        i = np.arange(1, run.range_m.size + 1)
+        se_r = run.sigma_m / np.sqrt(i)
+        ax_r.plot(i, run.range_m, "+", color="C3", ms=4)
+        ax_r.axhline(run.final_range_m, color="C3")
+        ax_r.plot(i, run.final_range_m + se_r, color="C0", lw=0.8)
+        ax_r.plot(i, run.final_range_m - se_r, color="C0", lw=0.8)
+        ax_r.set(xlabel="number of data n", ylabel=f"range to beacon {est.beacon} [m]")
+        ax_r.set_title(f"segment {est.segment}: {est.t_end_s - est.t_start_s:.0f} s", fontsize=9)
+        ax_s.plot(i, 1e3 * run.sigma_m, ".", color="C0", ms=3)
+        ax_s.axhline(1e3 * est.sigma_m, color="C3")
+        ax_s.fill_between(
+            i,
+            1e3 * (run.sigma_m - run.sigma_of_sigma_m),
+            1e3 * (run.sigma_m + run.sigma_of_sigma_m),
+            color="0.85",
+        )
+        ax_s.set(
+            xlabel="number of data n",
+            ylabel="sigma [mm]",
+            title=f"beacon {est.beacon}, segment {est.segment}: "
+            f"{1e3 * est.sigma_m:.0f} ± {1e3 * est.sigma_se_m:.0f} mm,"
+            f" {est.n_outliers} outliers removed",
+        )
+        ax_s.set_ylim(0.0, 3e3 * est.sigma_m)
+    fig.tight_layout()
+    return save_figure(fig, path)
 
 
 def _clip_limits(values: np.ndarray) -> tuple[float, float]:
