@@ -77,19 +77,35 @@ def logdet_rmse_figure(
 def trajectories_figure(
     runs: Mapping[str, SurveyRuns], path: Path, title: str, *, ellipses: bool = False
 ) -> Path:
-    """Fig. 8: measurement paths of one run per planner, with the transponders (and 95 % ellipses)."""
+    """Fig. 8: measurement paths of one run per planner, with the transponders (and 95 % ellipses).
+
+    Final ellipses of centimetres vanish on a plot tens of metres wide, so when the largest is under 2 %
+    of the plot's span they are drawn magnified about their estimates by a round factor, stated in the
+    legend; the estimates themselves are drawn at their true places.
+    """
     fig = Figure(figsize=(7, 6.5))
     ax = fig.add_subplot()
     first = next(iter(runs.values()))
+    truth = first.transponders_enu_m
     colours = ["tab:gray", "tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown"]
+    finals = {
+        label: confidence_ellipse(run.estimates_m[0, -1, :, :2], run.covariances_m2[0, -1, :, :2, :2])
+        for label, run in runs.items()
+    }
+    points = np.concatenate([truth[:, :2], *(run.sites_enu_m[0, :, :2] for run in runs.values())])
+    span = float(np.max(np.ptp(points, axis=0)))
+    largest = max(float(np.max(e.semi_major_m)) for e in finals.values())
+    magnify = _round_magnification(0.04 * span / largest) if largest < 0.02 * span else 1
     for (label, run), colour in zip(runs.items(), colours, strict=False):
         sites = run.sites_enu_m[0]
         ax.plot(sites[:, 0], sites[:, 1], ".-", color=colour, lw=1, ms=3, label=label)
         if ellipses:
-            final = confidence_ellipse(run.estimates_m[0, -1, :, :2], run.covariances_m2[0, -1, :, :2, :2])
-            for pts in final.points():
-                ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1)
-    truth = first.transponders_enu_m
+            final = finals[label]
+            centre = final.center_m[..., None, :]
+            for k, pts in enumerate(centre + magnify * (final.points() - centre)):
+                extra = {"label": f"95 % ellipses (x{magnify:g})" if magnify > 1 else "95 % ellipses"}
+                ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1, **(extra if k == 0 else {}))
+            ax.plot(*final.center_m.T, "x", color=colour, ms=6)
     ax.plot(truth[:, 0], truth[:, 1], "r^", ms=10, mec="k", label="transponders")
     start = first.sites_enu_m[0, 0]
     ax.plot(start[0], start[1], "o", color="tab:green", mec="k", ms=10, label="start")
@@ -98,6 +114,14 @@ def trajectories_figure(
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     return save_figure(fig, path)
+
+
+def _round_magnification(factor: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten not above ``factor`` (at least 1)."""
+    if factor <= 1.0:
+        return 1.0
+    decade = 10.0 ** np.floor(np.log10(factor))
+    return float(max(m * decade for m in (1.0, 2.0, 5.0) if m * decade <= factor))
 
 
 def major_axis_figure(
