@@ -243,16 +243,8 @@ def logs(
     """Locate the beacons of a GPS + USBL range log pair (origin: the first GPS fix)."""
     from oceanloc.estimation.range_logs import localize_beacons
     from oceanloc.geo.enu import enu_to_geodetic
-    from oceanloc.io.nmea import read_nmea
-    from oceanloc.io.usbl import align_ranges, read_usbl
 
-    gps_log = read_nmea(gps)
-    range_log = read_usbl(ranges, sound_speed_mps=sound_speed)
-    qc = gps_log.qc.merge(range_log.qc)
-    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
-    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap)
-    if aligned.dropped_no_gps:
-        err_console.print(f"{aligned.dropped_no_gps} ranges dropped: no GPS fix within {max_gap} s")
+    aligned, qc = _read_aligned(gps, ranges, sound_speed, max_gap)
     estimates = localize_beacons(aligned, sigma_range_m=sigma_range)
     table = Table(
         title=f"Beacons (ENU from the first fix {aligned.origin.lat_deg:.6f}, {aligned.origin.lon_deg:.6f})"
@@ -319,16 +311,11 @@ def noise(
         stationary_segments,
         total_range_sigma_m,
     )
-    from oceanloc.io.nmea import read_nmea
-    from oceanloc.io.usbl import align_ranges, format_utc, read_usbl
+    from oceanloc.io.usbl import format_utc
 
     if sigma_gps < 0.0 or max_speed <= 0.0 or window <= 0.0:
         raise ConfigError("--sigma-gps must be >= 0, --max-speed and --window positive")
-    gps_log = read_nmea(gps)
-    range_log = read_usbl(ranges, sound_speed_mps=sound_speed)
-    qc = gps_log.qc.merge(range_log.qc)
-    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
-    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap)
+    aligned, _ = _read_aligned(gps, ranges, sound_speed, max_gap)
     still = stationary_mask(aligned.t_unix_s, aligned.vehicle_enu_m, max_speed_mps=max_speed, window_s=window)
     segments = stationary_segments(aligned.t_unix_s, still, min_duration_s=min_duration)
     estimates = stationary_range_noise(aligned.t_unix_s, aligned.beacon, aligned.range_m, segments)
@@ -384,3 +371,18 @@ def noise(
                 "sigma_total_m": total,
             },
         )
+
+
+def _read_aligned(gps: Path, ranges: Path, sound_speed_mps: float, max_gap_s: float):
+    """Read a GPS and a range log, print their QC summary, and align the ranges to the GPS track."""
+    from oceanloc.io.nmea import read_nmea
+    from oceanloc.io.usbl import align_ranges, read_usbl
+
+    gps_log = read_nmea(gps)
+    range_log = read_usbl(ranges, sound_speed_mps=sound_speed_mps)
+    qc = gps_log.qc.merge(range_log.qc)
+    err_console.print("QC: " + qc.summary(max_lines=10), highlight=False)
+    aligned = align_ranges(gps_log, range_log, max_gap_s=max_gap_s)
+    if aligned.dropped_no_gps:
+        err_console.print(f"{aligned.dropped_no_gps} ranges dropped: no GPS fix within {max_gap_s} s")
+    return aligned, qc
