@@ -14,6 +14,8 @@ from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa, survey_spread
 from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
+from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import AlignedRanges
 
 app = typer.Typer(help="Locate transponders from recorded field data.", no_args_is_help=True)
 root.app.add_typer(app, name="localize")
@@ -373,7 +375,9 @@ def noise(
         )
 
 
-def _read_aligned(gps: Path, ranges: Path, sound_speed_mps: float, max_gap_s: float):
+def _read_aligned(
+    gps: Path, ranges: Path, sound_speed_mps: float, max_gap_s: float
+) -> tuple[AlignedRanges, QcReport]:
     """Read a GPS and a range log, print their QC summary, and align the ranges to the GPS track."""
     from oceanloc.io.nmea import read_nmea
     from oceanloc.io.usbl import align_ranges, read_usbl
