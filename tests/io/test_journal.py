@@ -121,3 +121,20 @@ def test_open_refuses_missing_unstarted_and_foreign_files(tmp_path: Path):
         assert j.meta()["planner"] == '"greedy"'
     with pytest.raises(DataError, match="latitude 91"):
         Journal(tmp_path / "r.db").add_fix(1.0, 91.0, 0.0, 0.0)
+
+
+def test_write_to_a_locked_journal_is_a_data_error_and_keeps_the_state(tmp_path: Path):
+    import sqlite3
+
+    path = tmp_path / "j.db"
+    with Journal(path) as j:
+        j.add_fix(1.0, 32.7, -117.2, 0.0)
+    other = sqlite3.connect(path, isolation_level=None)
+    other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock
+    with Journal(path, timeout_s=0.05) as j:
+        with pytest.raises(DataError, match=r"j\.db: cannot write to the journal \(database is locked\)"):
+            j.add_fix(2.0, 32.7, -117.2, 0.0)
+        other.rollback()
+        assert j.add_fix(2.0, 32.7, -117.2, 0.0)
+        np.testing.assert_array_equal(j.fixes()[:, 0], [1.0, 2.0])
+    other.close()

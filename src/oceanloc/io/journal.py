@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from oceanloc._typing import FloatArray
+from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import DataError
 from oceanloc.io.nmea import GpsLog
 from oceanloc.io.qc import QcReport
@@ -53,6 +53,8 @@ class Journal:
     create : bool
         Create the file if it does not exist (default). With ``False`` a missing file is a
         :class:`DataError` and nothing is created.
+    timeout_s : float
+        How long a write waits for another writer to finish, seconds.
 
     Raises
     ------
@@ -60,7 +62,7 @@ class Journal:
         If the file is not SQLite, or is an SQLite database with tables of its own (not a journal).
     """
 
-    def __init__(self, path: str | Path, *, create: bool = True) -> None:
+    def __init__(self, path: str | Path, *, create: bool = True, timeout_s: float = 30.0) -> None:
         self.path = Path(path)
         if not create and not self.path.is_file():
             raise DataError(f"{self.path}: no survey journal here (start one with `oceanloc survey start`)")
@@ -68,10 +70,10 @@ class Journal:
             raise DataError(f"{self.path}: folder {self.path.parent} does not exist")
         try:
             if create:
-                self._db = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
+                self._db = sqlite3.connect(self.path, isolation_level=None, timeout=timeout_s)
             else:  # mode=rw: never creates a file
                 uri = f"{self.path.resolve().as_uri()}?mode=rw"
-                self._db = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=30.0)
+                self._db = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=timeout_s)
         except sqlite3.Error as exc:
             raise DataError(f"{self.path}: cannot open as a survey journal ({exc})") from None
         try:
@@ -141,11 +143,7 @@ class Journal:
 
     def set_meta_many(self, items: Mapping[str, str]) -> None:
         """Write several meta keys in one transaction."""
-        with self._db:
-            self._db.execute("BEGIN IMMEDIATE")
-            self._db.executemany(
-                "INSERT OR REPLACE INTO meta VALUES (?, ?)", [(k, str(v)) for k, v in items.items()]
-            )
+        self._write("INSERT OR REPLACE INTO meta VALUES (?, ?)", [(k, str(v)) for k, v in items.items()])
 
     def meta(self) -> dict[str, str]:
         return dict(self._db.execute("SELECT key, value FROM meta").fetchall())
@@ -165,22 +163,14 @@ class Journal:
             raise DataError(f"fix at {t_unix_s}: latitude {lat_deg} deg is outside [-90, 90]")
         if not -180.0 <= values[2] <= 360.0:
             raise DataError(f"fix at {t_unix_s}: longitude {lon_deg} deg is outside [-180, 360]")
-        with self._db:
-            self._db.execute("BEGIN IMMEDIATE")
-            cur = self._db.execute("INSERT OR IGNORE INTO fixes VALUES (?, ?, ?, ?)", values)
-        return cur.rowcount == 1
+        return self._write("INSERT OR IGNORE INTO fixes VALUES (?, ?, ?, ?)", [values]) == 1
 
     def add_range(self, t_unix_s: float, beacon: int, range_m: float) -> bool:
         """Append one range in its own transaction; False if a range at that time and beacon was stored."""
         if not (np.isfinite(range_m) and range_m > 0.0 and np.isfinite(t_unix_s)):
             raise DataError(f"range at {t_unix_s}: negative, NaN or infinite value {range_m}")
-        with self._db:
-            self._db.execute("BEGIN IMMEDIATE")
-            cur = self._db.execute(
-                "INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)",
-                (float(t_unix_s), int(beacon), float(range_m)),
-            )
-        return cur.rowcount == 1
+        row = (float(t_unix_s), int(beacon), float(range_m))
+        return self._write("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", [row]) == 1
 
     def add_heading(self, t_unix_s: float, seq: int, heading_deg: float) -> bool:
         """Append one true heading (degrees clockwise from north) in its own transaction.
@@ -190,13 +180,23 @@ class Journal:
         """
         if not (math.isfinite(t_unix_s) and math.isfinite(heading_deg)):
             raise DataError(f"heading at {t_unix_s}: NaN or infinite value {heading_deg}")
-        with self._db:
-            self._db.execute("BEGIN IMMEDIATE")
-            cur = self._db.execute(
-                "INSERT OR IGNORE INTO headings VALUES (?, ?, ?)",
-                (float(t_unix_s), int(seq), float(heading_deg)),
-            )
-        return cur.rowcount == 1
+        row = (float(t_unix_s), int(seq), float(heading_deg))
+        return self._write("INSERT OR IGNORE INTO headings VALUES (?, ?, ?)", [row]) == 1
+
+    def _write(self, sql: str, rows: list[tuple]) -> int:
+        """Run one statement over ``rows`` in one transaction; returns the rows changed.
+
+        SQLite failures (journal locked by another writer past the timeout, disk full, read-only file)
+        are :class:`DataError` naming the journal; the transaction is rolled back, nothing committed is
+        touched.
+        """
+        try:
+            with self._db:
+                self._db.execute("BEGIN IMMEDIATE")
+                cur = self._db.executemany(sql, rows)
+        except sqlite3.Error as exc:
+            raise DataError(f"{self.path}: cannot write to the journal ({exc})") from None
+        return cur.rowcount
 
     def fix_at(self, t_unix_s: float) -> tuple[float, float, float] | None:
         """The stored fix (lat, lon, h) at that time, if any."""
@@ -263,7 +263,7 @@ class JournalRecords:
     lon_deg: FloatArray
     h_m: FloatArray
     range_t_unix_s: FloatArray
-    beacon: np.ndarray
+    beacon: IntArray
     range_m: FloatArray
     heading_t_unix_s: FloatArray
     heading_deg: FloatArray
