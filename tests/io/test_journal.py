@@ -1,3 +1,4 @@
+import dataclasses
 import signal
 import subprocess
 import sys
@@ -9,10 +10,12 @@ import pytest
 
 from oceanloc.errors import DataError
 from oceanloc.io.journal import Journal
+from oceanloc.io.qc import QcReport
 
 WRITER = """
 import sys
 from oceanloc.io.journal import Journal
+from oceanloc.io.qc import QcReport
 j = Journal(sys.argv[1])
 for k in range(100000):
     j.add_fix(1.5e9 + k, 32.7 + 1e-6 * k, -117.2, 0.0)
@@ -51,3 +54,87 @@ def test_killed_writer_loses_nothing_committed_and_resumes_identically(tmp_path:
         for k in range(n):
             j.add_fix(1.5e9 + k, 32.7 + 1e-6 * k, -117.2, 0.0)
         np.testing.assert_array_equal(j.fixes(), fixes)
+
+
+def _nmea_with_headings(path: Path) -> Path:
+    import datetime as dt
+
+    from oceanloc.io.nmea import format_gga, format_hdt, format_zda
+
+    t0 = dt.datetime(2018, 1, 4, 18, 0, tzinfo=dt.UTC)
+    lines = [format_hdt(10.0), format_zda(t0)]  # a heading before any fix has no time
+    for k in range(4):
+        lines.append(format_gga(t0 + dt.timedelta(seconds=k), 32.705 + 1e-5 * k, -117.236, -1.478))
+        lines += [format_hdt(20.0 + k), format_hdt(30.0 + k)] if k == 2 else [format_hdt(20.0 + k)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_append_gps_log_counts_headings_and_conflicts(tmp_path: Path):
+    from oceanloc.io.journal import append_gps_log
+    from oceanloc.io.nmea import read_nmea
+
+    log = read_nmea(_nmea_with_headings(tmp_path / "g.nmea"))
+    with Journal.start(tmp_path / "j.db", {}) as j:
+        fixes, heads = append_gps_log(j, log, "g.nmea")
+        assert (fixes.new, fixes.already_stored, heads.new) == (4, 0, 5)
+        fixes, heads = append_gps_log(j, log, "g.nmea")
+        assert (fixes.new, fixes.already_stored, heads.new, heads.already_stored) == (0, 4, 0, 5)
+        assert str(fixes) == "4 fixes (0 new, 4 already stored)"
+        # Two HDT after the third fix: both kept, in order (seq 0 and 1).
+        np.testing.assert_array_equal(j.headings()[:, 1:], [[0, 20], [0, 21], [0, 22], [1, 32], [0, 23]])
+        # A fix at a stored time with another position: kept as stored, named in the QC report.
+        moved = dataclasses.replace(log, lat_deg=log.lat_deg + 1e-4, qc=QcReport())
+        fixes, _ = append_gps_log(j, moved, "other.nmea")
+        assert (fixes.new, fixes.already_stored, fixes.conflicting) == (0, 0, 4)
+        assert str(moved.qc.issues[0]).startswith("other.nmea:3: duplicate record")
+        np.testing.assert_array_equal(j.fixes()[:, 1], log.lat_deg)
+
+
+def test_open_refuses_missing_unstarted_and_foreign_files(tmp_path: Path):
+    import sqlite3
+
+    missing = tmp_path / "none.db"
+    with pytest.raises(DataError, match="no survey journal here"):
+        Journal.open(missing)
+    assert not missing.exists()
+    Journal(tmp_path / "raw.db").close()
+    with pytest.raises(DataError, match="never started"):
+        Journal.open(tmp_path / "raw.db")
+    text = tmp_path / "notes.txt"
+    text.write_text("not a database at all, just some text\n" * 10)
+    with pytest.raises(DataError, match=r"notes\.txt: not a survey journal"):
+        Journal.open(text)
+    other = tmp_path / "other.db"
+    with sqlite3.connect(other) as db:
+        db.execute("CREATE TABLE birds (name TEXT)")
+    db.close()
+    before = other.read_bytes()
+    for opener in (Journal.open, Journal, lambda p: Journal.start(p, {})):
+        with pytest.raises(DataError, match="tables birds"):
+            opener(other)
+    assert other.read_bytes() == before and not Path(f"{other}-wal").exists()
+    Journal.start(tmp_path / "s.db", {"planner": '"greedy"'}).close()
+    with pytest.raises(DataError, match="already started"):
+        Journal.start(tmp_path / "s.db", {"planner": '"lookahead"'})
+    with Journal.open(tmp_path / "s.db") as j:
+        assert j.meta()["planner"] == '"greedy"'
+    with pytest.raises(DataError, match="latitude 91"):
+        Journal(tmp_path / "r.db").add_fix(1.0, 91.0, 0.0, 0.0)
+
+
+def test_write_to_a_locked_journal_is_a_data_error_and_keeps_the_state(tmp_path: Path):
+    import sqlite3
+
+    path = tmp_path / "j.db"
+    with Journal(path) as j:
+        j.add_fix(1.0, 32.7, -117.2, 0.0)
+    other = sqlite3.connect(path, isolation_level=None)
+    other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock
+    with Journal(path, timeout_s=0.05) as j:
+        with pytest.raises(DataError, match=r"j\.db: cannot write to the journal \(database is locked\)"):
+            j.add_fix(2.0, 32.7, -117.2, 0.0)
+        other.rollback()
+        assert j.add_fix(2.0, 32.7, -117.2, 0.0)
+        np.testing.assert_array_equal(j.fixes()[:, 0], [1.0, 2.0])
+    other.close()

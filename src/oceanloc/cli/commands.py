@@ -15,5 +15,6 @@ from oceanloc.cli import (  # noqa: F401
     simulate_drift,
     simulate_logs,
     simulate_survey,
+    survey_journal,
     tdoa,
 )

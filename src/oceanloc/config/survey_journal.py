@@ -1,0 +1,157 @@
+"""Settings of a field survey kept in a journal: planner, vehicle, sensor, frame, beacons and prior.
+
+``oceanloc survey start`` validates them once and stores them in the journal's ``meta`` table
+(:meth:`JournalSettings.to_meta`, one JSON value per key, so ``sqlite3 survey.db 'select * from meta'``
+shows them); every later command reads them back (:meth:`JournalSettings.from_meta`) so that the
+estimates and the next waypoint are a pure function of the journal.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from oceanloc._typing import PLANNER_KINDS
+from oceanloc.config.survey import PlannerSettings
+from oceanloc.errors import ConfigError, DataError
+from oceanloc.geo.enu import EnuOrigin
+from oceanloc.units import DEG
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class JournalSettings:
+    """A field survey's settings (defaults: the journal's pier experiment, Section VI).
+
+    Attributes
+    ----------
+    planner : PlannerSettings
+        Planner kind, look-ahead steps ``k`` and reach ``d_max`` (metres).
+    max_yaw_rate_rad_s : float
+        ``w_max`` of the yaw-rate planners, rad/s.
+    speed_mps : float
+        Vehicle speed assumed by the yaw-rate planners, m/s.
+    period_s : float
+        Time between planned measurement sites, s.
+    sigma_range_m : float
+        Total range sigma (USBL and GPS projected on the line of sight), metres.
+    origin : EnuOrigin or None
+        ENU origin; None: the earliest fix in the journal (as in the papers).
+    beacons : tuple of int
+        Beacon ids of the survey; ranges to others are rejected. Empty: any id is accepted.
+    prior_sigma_enu_m : (3,) float
+        Prior 1-sigma per axis around the point below the shortest range, metres.
+    prior_depth_m : float
+        Prior depth below the antenna's median height, metres.
+    heading_deg : float or None
+        Vehicle true heading at the start (degrees clockwise from north), used until the journal holds
+        an HDT heading or two distinct fixes.
+    sound_speed_mps : float
+        Sound speed for travel-time columns of range files, m/s.
+    max_gap_s : float
+        Largest GPS gap a range is interpolated across, seconds.
+    """
+
+    planner: PlannerSettings = dataclasses.field(default_factory=lambda: PlannerSettings(kind="greedy"))
+    max_yaw_rate_rad_s: float = 30.0 * DEG
+    speed_mps: float = 1.0
+    period_s: float = 5.0
+    sigma_range_m: float = 1.006
+    origin: EnuOrigin | None = None
+    beacons: tuple[int, ...] = ()
+    prior_sigma_enu_m: tuple[float, float, float] = (100.0, 100.0, 10.0)
+    prior_depth_m: float = 2.0
+    heading_deg: float | None = None
+    sound_speed_mps: float = 1500.0
+    max_gap_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        positive = ("max_yaw_rate_rad_s", "speed_mps", "period_s", "sigma_range_m", "max_gap_s")
+        for name in positive:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ConfigError(f"survey setting {name} must be a positive number, got {value}")
+        if len(self.prior_sigma_enu_m) != 3 or not all(
+            math.isfinite(s) and s > 0 for s in self.prior_sigma_enu_m
+        ):
+            raise ConfigError(
+                f"survey setting prior_sigma_enu_m needs 3 positive values, got {self.prior_sigma_enu_m}"
+            )
+        if not (math.isfinite(self.prior_depth_m) and self.prior_depth_m >= 0.0):
+            raise ConfigError(f"survey setting prior_depth_m must be >= 0, got {self.prior_depth_m}")
+        if self.heading_deg is not None and not (
+            math.isfinite(self.heading_deg) and -360.0 <= self.heading_deg <= 360.0
+        ):
+            raise ConfigError(f"survey setting heading_deg must be in [-360, 360], got {self.heading_deg}")
+        if not 1300.0 <= self.sound_speed_mps <= 1700.0:
+            raise ConfigError(
+                f"survey setting sound_speed_mps {self.sound_speed_mps} is outside [1300, 1700]"
+            )
+        if len(set(self.beacons)) != len(self.beacons) or any(b < 0 for b in self.beacons):
+            raise ConfigError(f"survey setting beacons must be distinct non-negative ids, got {self.beacons}")
+
+    def to_meta(self) -> dict[str, str]:
+        """The settings as journal meta entries (JSON values; angles in degrees)."""
+        o = self.origin
+        values: dict[str, Any] = {
+            "planner": self.planner.kind,
+            "horizon": self.planner.horizon,
+            "max_distance_m": self.planner.max_distance_m,
+            "max_yaw_rate_deg_s": self.max_yaw_rate_rad_s / DEG,
+            "speed_mps": self.speed_mps,
+            "period_s": self.period_s,
+            "sigma_range_m": self.sigma_range_m,
+            "origin_lat_lon_h": None if o is None else [o.lat_deg, o.lon_deg, o.h_m],
+            "beacons": list(self.beacons),
+            "prior_sigma_enu_m": list(self.prior_sigma_enu_m),
+            "prior_depth_m": self.prior_depth_m,
+            "heading_deg": self.heading_deg,
+            "sound_speed_mps": self.sound_speed_mps,
+            "max_gap_s": self.max_gap_s,
+        }
+        return {k: json.dumps(v) for k, v in values.items()}
+
+    @staticmethod
+    def from_meta(meta: Mapping[str, str], source: str = "journal") -> JournalSettings:
+        """Read the settings back; a missing or malformed entry is a :class:`DataError` naming it."""
+
+        def get(key: str) -> Any:
+            if key not in meta:
+                raise DataError(f"{source}: survey setting {key!r} missing from the journal")
+            try:
+                return json.loads(meta[key])
+            except json.JSONDecodeError:
+                raise DataError(
+                    f"{source}: survey setting {key!r} is not valid JSON: {meta[key]!r}"
+                ) from None
+
+        try:
+            kind = get("planner")
+            if kind not in PLANNER_KINDS:
+                raise DataError(f"{source}: survey setting 'planner' is {kind!r}")
+            origin = get("origin_lat_lon_h")
+            return JournalSettings(
+                planner=PlannerSettings(
+                    kind=kind, horizon=int(get("horizon")), max_distance_m=float(get("max_distance_m"))
+                ),
+                max_yaw_rate_rad_s=float(get("max_yaw_rate_deg_s")) * DEG,
+                speed_mps=float(get("speed_mps")),
+                period_s=float(get("period_s")),
+                sigma_range_m=float(get("sigma_range_m")),
+                origin=None
+                if origin is None
+                else EnuOrigin(lat_deg=float(origin[0]), lon_deg=float(origin[1]), h_m=float(origin[2])),
+                beacons=tuple(int(b) for b in get("beacons")),
+                prior_sigma_enu_m=tuple(float(s) for s in get("prior_sigma_enu_m")),  # type: ignore[arg-type]
+                prior_depth_m=float(get("prior_depth_m")),
+                heading_deg=None if get("heading_deg") is None else float(get("heading_deg")),
+                sound_speed_mps=float(get("sound_speed_mps")),
+                max_gap_s=float(get("max_gap_s")),
+            )
+        except (TypeError, ValueError, IndexError) as exc:
+            if isinstance(exc, DataError):
+                raise
+            raise DataError(f"{source}: malformed survey settings ({exc})") from None
