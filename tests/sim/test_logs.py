@@ -46,3 +46,23 @@ def test_stationary_segment_gives_the_published_noise(tmp_path: Path):
     # range noise of beacon 2 is 113 mm; 127 ranges give a relative SE of 6.3%, allow 3 SE.
     est = running_range_noise(ranges.range_m[still])
     assert abs(est.final_sigma_m / 0.113 - 1) < 3 * 0.063
+
+
+def test_hdt_headings_follow_the_course_over_ground(tmp_path: Path):
+    # True headings are clockwise from north. Over 20 s the boat moves ~20 m against 1 m of GPS error, so
+    # the course from the fixes is good to a few degrees; the median difference must be below 10 deg.
+    logs = simulate_pier_logs(tmp_path, PierLogSettings(duration_s=900.0), np.random.default_rng(3))
+    gps = read_nmea(logs.nmea_path)
+    from oceanloc.geo.enu import geodetic_to_enu
+
+    enu = geodetic_to_enu(gps.lat_deg, gps.lon_deg, gps.h_m, PIER_ORIGIN)
+    moving = gps.t_unix_s - gps.t_unix_s[0] > 420.0
+    lag = 20
+    d = enu[lag:] - enu[:-lag]
+    course_deg = np.degrees(np.arctan2(d[:, 0], d[:, 1])) % 360.0
+    # heading at the middle of each 20 s stretch (one HDT per fix, stamped with that fix's time)
+    mid = np.interp(
+        gps.t_unix_s[:-lag] + lag / 2, gps.heading_t_unix_s, np.unwrap(gps.heading_deg, period=360)
+    )
+    diff = (course_deg - mid + 180.0) % 360.0 - 180.0
+    assert np.median(np.abs(diff[moving[:-lag]])) < 10.0

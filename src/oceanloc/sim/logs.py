@@ -77,6 +77,7 @@ def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.
     dt_s = 1.0 / s.gps_rate_hz
     # Boat: stationary near beacon 1, then a bounded random wander at speed_mps.
     pos = np.zeros((n_gps, 3))
+    yaw = np.zeros(n_gps)
     start = beacons[0, :2] + np.array([0.5, -8.0])
     heading = rng.uniform(-np.pi, np.pi)
     p = start.copy()
@@ -88,6 +89,9 @@ def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.
                 heading = np.arctan2(*(centre - p)[::-1])
             p = p + s.speed_mps * dt_s * np.array([np.cos(heading), np.sin(heading)])
         pos[k, :2] = p
+        yaw[k] = heading
+    # HDT is a true heading: clockwise from north, where the yaw is counter-clockwise from east.
+    true_heading_deg = np.mod(90.0 - np.degrees(yaw), 360.0)
     # Gauss-Markov DGPS error, stationary variance gps_sigma^2 per horizontal axis, half that vertically.
     phi = np.exp(-dt_s / s.gps_correlation_s)
     err = np.zeros((n_gps, 3))
@@ -104,7 +108,7 @@ def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.
         if k % 60 == 0:
             lines.append(format_zda(stamp))
         lines.append(format_gga(stamp, geo[k, 0], geo[k, 1], geo[k, 2]))
-        lines.append(format_hdt(np.degrees(heading)))
+        lines.append(format_hdt(true_heading_deg[k]))
     # Ranges at range_rate_hz alternating beacons, from the true boat position.
     t_r = np.arange(0.0, s.duration_s - 1.0, 1.0 / s.range_rate_hz) + 0.37
     which = np.arange(t_r.size) % beacons.shape[0]
