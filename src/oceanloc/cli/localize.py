@@ -237,6 +237,10 @@ def logs(
     ranges: Annotated[Path, typer.Argument(help="USBL range CSV (utc,beacon,range_m|owtt_s|twtt_s).")],
     sound_speed: Annotated[float, typer.Option(help="Sound speed for travel-time columns, m/s.")] = 1500.0,
     sigma_range: Annotated[float, typer.Option(help="Total range sigma (USBL and GPS), m.")] = 1.006,
+    sigma_gps: Annotated[float, typer.Option(help="GPS part of it (per horizontal axis), m.")] = 1.0,
+    gps_correlation: Annotated[
+        float, typer.Option(help="GPS error time constant, s (Gauss-Markov); 0: white, as in the journal.")
+    ] = 60.0,
     max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate across, s.")] = 2.0,
     json_path: Annotated[
         Path | None, typer.Option("--json", help="Write the estimates as JSON here.")
@@ -247,7 +251,12 @@ def logs(
     from oceanloc.geo.enu import enu_to_geodetic
 
     aligned, qc = _read_aligned(gps, ranges, sound_speed, max_gap)
-    estimates = localize_beacons(aligned, sigma_range_m=sigma_range)
+    estimates = localize_beacons(
+        aligned,
+        sigma_range_m=sigma_range,
+        sigma_gps_m=sigma_gps,
+        gps_correlation_s=gps_correlation if gps_correlation > 0 else None,
+    )
     table = Table(
         title=f"Beacons (ENU from the first fix {aligned.origin.lat_deg:.6f}, {aligned.origin.lon_deg:.6f})"
     )
