@@ -20,7 +20,14 @@ import numpy as np
 from oceanloc._typing import FloatArray
 from oceanloc.evaluation.metrics import LogDetStats, log_det_stats, rmsee
 from oceanloc.evaluation.montecarlo import run_chunked
-from oceanloc.sim.replay import RecordSet, ReplayRuns, ReplaySettings, replay_surveys
+from oceanloc.sim.replay import (
+    RecordSet,
+    ReplayRuns,
+    ReplaySettings,
+    check_epochs,
+    planner_settings,
+    replay_surveys,
+)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -81,6 +88,8 @@ def replay_monte_carlo(
     progress: Callable[[int], None] | None = None,
 ) -> ReplayStudy:
     """Run ``runs`` replays of one planner and summarize them (see the module docstring)."""
+    check_epochs(records, settings)  # here, not in a worker
+    planner_settings(planner, settings.reach_m)
     task = functools.partial(_chunk, records=records, settings=settings, planner=planner, seed=seed)
     parts = run_chunked(task, runs, executor=executor, chunk_size=chunk_size, progress=progress)
     return summarize(ReplayRuns.concatenate(parts), records.name, seed)

@@ -410,10 +410,7 @@ def replay_surveys(
     """
     runs = np.asarray(run_indices, dtype=np.int64).ravel()
     n_runs, n_epochs, m, n_rec = runs.size, settings.epochs, records.n_transponders, records.n_records
-    if n_epochs > n_rec:
-        raise ConfigError(
-            f"{records.name}: {n_epochs} epochs asked for, but only {n_rec} recorded measurements to use"
-        )
+    check_epochs(records, settings)
     site_planner = _build(planner, settings, records)
     rngs = run_generators(seed, runs)
     options = settings.estimator or MapOptions(surface_z_m=records.surface_z_m)
@@ -480,6 +477,15 @@ def replay_surveys(
         converged=converged,
         plan_time_s=plan_time,
     )
+
+
+def check_epochs(records: RecordSet, settings: ReplaySettings) -> None:
+    """Raise a :class:`ConfigError` naming the records if a replay asks for more epochs than records."""
+    if settings.epochs > records.n_records:
+        raise ConfigError(
+            f"{records.name}: {settings.epochs} epochs asked for, but only {records.n_records} recorded "
+            "measurements to use"
+        )
 
 
 def _build(planner: str, settings: ReplaySettings, records: RecordSet) -> MeasurementSitePlanner | None:
