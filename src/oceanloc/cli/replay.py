@@ -369,15 +369,19 @@ def _convergence_table(exp: rep.ReplayExperiment, *, unit_m: float = 1.0) -> Tab
         title=f"Convergence against the recorded order, n = {n}",
         caption="n RMSEE / n log det: the epoch from which a planner stays at least as good as the recorded "
         f"order at n = {n}; NEES: mean at n = {n} ({3 * exp.records.n_transponders} if consistent); snap: "
-        "mean distance from the planned point to the record used (eq. 31)",
+        "mean distance from the planned point to the record used (eq. 31); conv: MAP solves that met the "
+        "step test within J_max",
     )
-    for col in ("planner", f"RMSEE {unit}", "log det", "n RMSEE", "n log det", "NEES", "snap m", "plan ms"):
+    for col in (
+        "planner", f"RMSEE {unit}", "log det", "n RMSEE", "n log det", "NEES", "snap m", "plan ms", "conv %",
+    ):  # fmt: skip
         table.add_column(col, justify="left" if col == "planner" else "right")
     for c in exp.convergence:
         table.add_row(
             planner_label(c.planner), f"{c.rmse_final_m / unit_m:.2f}", f"{c.logdet_final:.2f}",
             _epoch(c.epochs_to_recorded_rmse, n), _epoch(c.epochs_to_recorded_logdet, n),
             f"{c.nees_final:.1f}", f"{c.snap_distance_m:.2f}", f"{1e3 * c.plan_time_s:.2f}",
+            f"{100 * c.converged_fraction:.1f}",
         )  # fmt: skip
     return table
 

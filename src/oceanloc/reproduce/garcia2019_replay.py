@@ -113,6 +113,8 @@ class ConvergenceRow:
     nees_final : float
         Mean NEES at ``N`` (``3M`` if consistent).
     snap_distance_m, plan_time_s : float
+    converged_fraction : float
+        Share of MAP solves that met the step-size test within ``J_max``.
     """
 
     planner: str
@@ -123,6 +125,7 @@ class ConvergenceRow:
     nees_final: float
     snap_distance_m: float
     plan_time_s: float
+    converged_fraction: float
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -204,6 +207,7 @@ def convergence_rows(studies: Mapping[str, ReplayStudy], transponder: int = 0) -
             nees_final=float(s.nees_mean[-1]),
             snap_distance_m=s.snap_distance_m,
             plan_time_s=s.plan_time_s,
+            converged_fraction=s.converged_fraction,
         )
         for name, s in studies.items()
     ]
@@ -444,6 +448,7 @@ def experiment_json(exp: ReplayExperiment) -> dict[str, object]:
                 "nees_final": c.nees_final,
                 "snap_distance_m": c.snap_distance_m,
                 "plan_time_s": c.plan_time_s,
+                "converged_fraction": c.converged_fraction,
             }
             for c in exp.convergence
         ],
