@@ -71,5 +71,5 @@ def replay_tracks_figure(
     ax.set(xlabel="east [m]", ylabel="north [m]", title=title)
     ax.axis("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return save_figure(fig, path)
