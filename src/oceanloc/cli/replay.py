@@ -38,12 +38,12 @@ app = typer.Typer(
     no_args_is_help=True,
 )
 
-_READINGS = """
-Readings: eq. (31) picks the unused record nearest (horizontally) to the planned point among those
-within d_max of the vehicle, else the nearest unused record; each ping is used once; the vehicle moves
-to the chosen record; 'recorded' is the log's own order from the start record. Each run draws its prior
-mean from N(reference, P_0), P_0 = diag(100, 100, 2)^2 m^2; all planners share the prior draws.
-"""
+_READINGS = (
+    "Readings: eq. (31) picks the unused record nearest (horizontally) to the planned point among those "
+    "within d_max of the vehicle, else the nearest unused record; each ping is used once; the vehicle moves "
+    "to the chosen record; 'recorded' is the log's own order from the start record. Each run draws its "
+    "prior mean from N(reference, P_0), P_0 = diag(100, 100, 2)^2 m^2; all planners share the prior draws."
+)
 
 Runs = Annotated[int, typer.Option("--runs", min=2, help="Monte Carlo runs per planner (paper: 100).")]
 Epochs = Annotated[int, typer.Option("--epochs", min=1, help="Measurement epochs N (paper: 50).")]
@@ -65,7 +65,7 @@ YawRate = Annotated[float, typer.Option("--yaw-rate", min=0.0, help="w_max of th
 @app.command(
     "gnssa",
     help="Replay GNSS-A surveys: the reference is the robust solution over all pings (oceanloc localize "
-    "gnssa); the replayed estimate's error is measured against it.\n\n" + _READINGS + "\nGNSS-A: one epoch "
+    "gnssa); the replayed estimate's error is measured against it.\n\n" + _READINGS + "\n\nGNSS-A: one epoch "
     "advances the recording's median ping spacing (--step) and d_max is twice that (--reach); the "
     "measurement is c(t) TWTT with the reference's sound speed and per-ping sigma.",
 )
@@ -179,9 +179,9 @@ def gnssa_command(
     help="Reproduce journal Tables VII (M = 1, beacon 1) and IX (M = 2) on a GPS + USBL log pair, with the "
     "paper's values (and the thesis' Tables 6.2 and 6.6 for greedy and random disk) beside ours.\n\n"
     + _READINGS
-    + "\nLogs: p_V(1) = [8.62, -6.77, 0] m, phi(1) = 13 deg, 3 m/s, T = 1 s, w_max = 30 deg/s, d_max = 10 m, "
-    "sigma_eps = 1.006 m; a record of Table IX is one range to each beacon within 3 s; ranges the robust "
-    "estimator rejects as outliers are left out.",
+    + "\n\nLogs: p_V(1) = [8.62, -6.77, 0] m, phi(1) = 13 deg, 3 m/s, T = 1 s, w_max = 30 deg/s, "
+    "d_max = 10 m, sigma_eps = 1.006 m; a record of Table IX is one range to each beacon within 3 s; "
+    "ranges the robust estimator rejects as outliers are left out.",
 )
 def logs_command(
     gps: Annotated[Path, typer.Argument(help="NMEA 0183 GPS log (GGA with RMC or ZDA dates).")],
