@@ -9,6 +9,7 @@ from oceanloc.cli import (  # noqa: F401
     dop,
     drift_plan,
     localize,
+    replay,
     reproduce_dillard,
     reproduce_dillard_drrt,
     reproduce_garcia,

@@ -9,7 +9,7 @@ from __future__ import annotations
 import typer
 
 from oceanloc import __version__
-from oceanloc.cli import reproduce, simulate
+from oceanloc.cli import replay, reproduce, simulate
 from oceanloc.cli import scenarios as scenarios_cmd
 
 app = typer.Typer(
@@ -20,6 +20,7 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(scenarios_cmd.app, name="scenarios")
+app.add_typer(replay.app, name="replay")
 app.add_typer(reproduce.app, name="reproduce")
 app.add_typer(simulate.app, name="simulate")
 
