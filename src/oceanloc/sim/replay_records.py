@@ -4,7 +4,8 @@
   (:func:`oceanloc.estimation.gnssa.localize_gnssa` over all pings) used; its outliers are left out. The
   measurement is the two-way path ``c(t_i) TWTT_i`` with ``c(t_i)`` the reference's sound speed at that
   ping (its piecewise-linear estimate, whose prior is the published harmonic mean) and the reference's
-  per-ping sigma; the record's location is the transmit position. The reference position is the
+  per-ping sigma, less the reference's horizontal-gradient and refraction terms at its position (the
+  replay's model is the straight two-leg path); the record's location is the transmit position. The reference position is the
   "truth" replayed errors are measured against, so a replay that used every ping would return it.
 * **GPS + USBL logs** (:func:`range_log_records`): ranges to the beacons with the journal's total sigma
   ``sigma_eps`` (1.006 m, Section VI-B). One beacon: one record per range. Several beacons: the SeaTrac
@@ -24,6 +25,7 @@ from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, hat_basis, loca
 from oceanloc.estimation.range_logs import BeaconEstimate, localize_beacons
 from oceanloc.io.gnssa import GnssaSurvey
 from oceanloc.io.usbl import AlignedRanges
+from oceanloc.models.acoustics import gradient_path_m2, refraction_shortening_m
 from oceanloc.sim.replay import RecordSet
 
 SIGMA_EPS_M = 1.006
@@ -42,8 +44,16 @@ def gnssa_records(survey: GnssaSurvey, reference: GnssaResult, turnaround_s: flo
         speed = hat_basis(t_mid, reference.knot_times_s) @ reference.sound_speed_knots_mps
     else:
         speed = np.full(survey.n_pings, reference.sound_speed_mps)
-    path = speed * (survey.twtt_s - turnaround_s)
     tx, rx = survey.transmit_enu_m, survey.receive_enu_m
+    # The reference's horizontal gradient and refraction terms, evaluated at its position, turn each
+    # c TWTT into the straight two-leg path the replay's model predicts.
+    ref = reference.position_enu_m
+    correction = sum(
+        gradient_path_m2(ref, leg) @ (1e-3 * reference.gradient_per_km)
+        - 1e-6 * reference.refraction_ppm * refraction_shortening_m(ref, leg)
+        for leg in (tx, rx)
+    )
+    path = speed * (survey.twtt_s - turnaround_s) - correction
     return RecordSet(
         name=survey.name,
         location_enu_m=tx[used].copy(),
