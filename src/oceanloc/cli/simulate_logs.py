@@ -10,7 +10,8 @@ import typer
 
 from oceanloc.cli import simulate
 from oceanloc.cli._common import console
-from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
+from oceanloc.geo.enu import enu_to_geodetic
+from oceanloc.sim.logs import PIER_ORIGIN, PierLogSettings, simulate_pier_logs
 
 
 @simulate.app.command("logs")
@@ -30,7 +31,16 @@ def logs(
     )
     console.print(
         f"wrote {res.nmea_path} ({res.n_fixes} fixes) and {res.ranges_path} ({res.n_ranges} ranges, "
-        f"{res.n_outliers} multipath outliers, {res.n_corrupt} corrupt lines); beacons (E, N, U) m: "
-        + "; ".join(f"{tuple(map(float, b))}" for b in res.beacons_enu_m),
+        f"{res.n_outliers} multipath outliers, {res.n_corrupt} corrupt lines)",
         highlight=False,
     )
+    # The truth in the journal's frame and as latitude/longitude: `localize logs` puts its origin at
+    # the first fix, so compare positions there by latitude and longitude.
+    origin = f"{PIER_ORIGIN.lat_deg:.3f}, {PIER_ORIGIN.lon_deg:.3f}, {PIER_ORIGIN.h_m:.3f} m"
+    for k, b in enumerate(res.beacons_enu_m, start=1):
+        lat, lon, h = enu_to_geodetic(b, PIER_ORIGIN)
+        console.print(
+            f"beacon {k}: E {b[0]:.2f}, N {b[1]:.2f}, U {b[2]:.2f} m from ({origin});"
+            f" {lat:.7f}, {lon:.7f}, {h:.2f} m",
+            highlight=False,
+        )

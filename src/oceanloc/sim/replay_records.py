@@ -5,8 +5,9 @@
   measurement is the two-way path ``c(t_i) TWTT_i`` with ``c(t_i)`` the reference's sound speed at that
   ping (its piecewise-linear estimate, whose prior is the published harmonic mean) and the reference's
   per-ping sigma, less the reference's horizontal-gradient and refraction terms at its position (the
-  replay's model is the straight two-leg path); the record's location is the transmit position. The reference position is the
-  "truth" replayed errors are measured against, so a replay that used every ping would return it.
+  replay's model is the straight two-leg path); the record's location is the transmit position. The
+  reference position is the "truth" replayed errors are measured against, so a replay that used every
+  ping would return it.
 * **GPS + USBL logs** (:func:`range_log_records`): ranges to the beacons with the journal's total sigma
   ``sigma_eps`` (1.006 m, Section VI-B). One beacon: one record per range. Several beacons: the SeaTrac
   interrogates them in turn, so a record is a group of consecutive ranges, one to each beacon, within
