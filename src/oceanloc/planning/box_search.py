@@ -21,6 +21,7 @@ objectives have near saturated yaw rates).
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -153,7 +154,11 @@ def maximize_in_box(
     u_lo = np.where(per, lo, -0.5 * np.pi)
     u_hi = np.where(per, hi, 0.5 * np.pi)
 
+    any_periodic = bool(np.any(per))
+
     def to_x(u: FloatArray) -> FloatArray:
+        if not any_periodic:
+            return mid + half * np.sin(u)
         return np.where(per, lo + np.mod(u - lo, hi - lo), mid + half * np.sin(u))
 
     def fn_u(u: FloatArray, rows: IntArray) -> FloatArray:
@@ -175,17 +180,7 @@ def maximize_in_box(
     scale_min = opts.step_tol * 2.0 * np.pi / np.max(base)
     evaluations = mesh.shape[0]
 
-    stencil = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=d)))
-    center = (len(stencil) - 1) // 2
-    plus = np.array([_stencil_index(stencil, {i: 1}) for i in range(d)])
-    minus = np.array([_stencil_index(stencil, {i: -1}) for i in range(d)])
-    pair_i, pair_j = np.triu_indices(d, 1)
-    corners = np.array(
-        [
-            [_stencil_index(stencil, {int(i): a, int(j): b}) for i, j in zip(pair_i, pair_j, strict=True)]
-            for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))
-        ]
-    ).reshape(4, -1)
+    stencil, center, plus, minus, pair_i, pair_j, corners = _stencil(d)
     diag = np.arange(d)
     live = np.arange(u.shape[0])
     for _ in range(opts.max_iterations):
@@ -251,6 +246,26 @@ def _box(
     if lo.shape != hi.shape or per.shape != lo.shape or not np.all(hi > lo):
         raise ConfigError(f"invalid box: lower {lo}, upper {hi}, periodic {per}")
     return lo, hi, per
+
+
+@functools.lru_cache(maxsize=8)
+def _stencil(d: int) -> tuple[FloatArray, int, IntArray, IntArray, IntArray, IntArray, IntArray]:
+    """The ``3^d`` stencil and the indices of its centre, axis neighbours and corner pairs (cached: the
+    same few dimensions recur on every planning call)."""
+    stencil = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=d)))
+    center = (len(stencil) - 1) // 2
+    plus = np.array([_stencil_index(stencil, {i: 1}) for i in range(d)])
+    minus = np.array([_stencil_index(stencil, {i: -1}) for i in range(d)])
+    pair_i, pair_j = np.triu_indices(d, 1)
+    corners = np.array(
+        [
+            [_stencil_index(stencil, {int(i): a, int(j): b}) for i, j in zip(pair_i, pair_j, strict=True)]
+            for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))
+        ]
+    ).reshape(4, -1)
+    for arr in (stencil, plus, minus, pair_i, pair_j, corners):
+        arr.flags.writeable = False
+    return stencil, center, plus, minus, pair_i, pair_j, corners
 
 
 def _stencil_index(stencil: FloatArray, offsets: dict[int, int]) -> int:

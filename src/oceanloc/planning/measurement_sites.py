@@ -165,22 +165,34 @@ class _YawRateObjective:
     def __init__(self, state: PlanningState, planner: LookaheadPlanner) -> None:
         pos, est = state.pos_enu_m, state.estimates_m
         chol = scaled_cholesky(state.covariances_m2, planner.sigma_range_m)
-        self.x0, self.y0, self.yaw0 = pos[:, 0], pos[:, 1], state.yaw_rad
-        self.ex, self.ey = est[..., 0], est[..., 1]
-        self.dz = est[..., 2] - pos[:, 2:3]
-        self.lower = [chol[..., i, j] for i, j in ((0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2))]
+        dz = est[..., 2] - pos[:, 2:3]
+        # one (B, 12, M) table of per-problem and per-transponder constants: one gather per call
+        self.table = np.stack(
+            [
+                np.broadcast_to(pos[:, 0:1], dz.shape),
+                np.broadcast_to(pos[:, 1:2], dz.shape),
+                np.broadcast_to(state.yaw_rad[:, None], dz.shape),
+                est[..., 0],
+                est[..., 1],
+                dz,
+                *(chol[..., i, j] for i, j in ((0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2))),
+            ],
+            axis=1,
+        )
         self.step_m = planner.speed_mps * planner.period_s
         self.period_s = planner.period_s
+        self.batch = pos.shape[0]
 
     def __call__(self, rates: FloatArray, rows: IntArray) -> FloatArray:
-        yaw = self.yaw0[rows, None, None] + np.cumsum(rates, axis=-1) * self.period_s
-        px = self.x0[rows, None, None] + np.cumsum(np.cos(yaw), axis=-1) * self.step_m
-        py = self.y0[rows, None, None] + np.cumsum(np.sin(yaw), axis=-1) * self.step_m
-        dx = self.ex[rows, None, None, :] - px[..., None]
-        dy = self.ey[rows, None, None, :] - py[..., None]
-        dz = self.dz[rows, None, None, :]
-        lower = [c[rows, None, None, :] for c in self.lower]
-        return whitened_gain(dx, dy, dz, lower).sum(axis=-1)
+        table = self.table if rows.size == self.batch == 1 else self.table[rows]
+        c = table[:, :, None, None, :]  # (b, 12, 1, 1, M)
+        x0, y0, yaw0 = c[:, 0, ..., 0], c[:, 1, ..., 0], c[:, 2, ..., 0]
+        yaw = yaw0 + np.cumsum(rates, axis=-1) * self.period_s
+        px = x0 + np.cumsum(np.cos(yaw), axis=-1) * self.step_m
+        py = y0 + np.cumsum(np.sin(yaw), axis=-1) * self.step_m
+        dx = c[:, 3] - px[..., None]
+        dy = c[:, 4] - py[..., None]
+        return whitened_gain(dx, dy, c[:, 5], [c[:, 6 + i] for i in range(6)]).sum(axis=-1)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
