@@ -49,15 +49,25 @@ class BoxSearchOptions:
         Newton iterations of the polish stage.
     step_tol : float
         Stop when the stencil spacing falls below this fraction of the box width.
+    value_tol : float
+        Or when the local Newton model, at a maximum, promises less than this fraction of the value more
+        (the planners need the optimum to 1e-6 relative; this is ten thousand times finer).
     """
 
     grid_points: int = 9
     starts: int = 3
     max_iterations: int = 40
     step_tol: float = 1e-7
+    value_tol: float = 1e-10
 
     def __post_init__(self) -> None:
-        if self.grid_points < 2 or self.starts < 1 or self.max_iterations < 0 or not self.step_tol > 0:
+        if (
+            self.grid_points < 2
+            or self.starts < 1
+            or self.max_iterations < 0
+            or not self.step_tol > 0
+            or not self.value_tol >= 0
+        ):
             raise ConfigError(f"invalid box search options: {self}")
 
 
@@ -182,13 +192,18 @@ def maximize_in_box(
 
     stencil, center, plus, minus, pair_i, pair_j, corners = _stencil(d)
     diag = np.arange(d)
+    # The stencil of each iteration is centred on a candidate: the Newton point of the previous model,
+    # evaluated lazily as the centre of the next stencil (one objective call per iteration), or the best
+    # point so far after a failed candidate. ``u`` and ``f`` hold the best point seen, so the search is
+    # monotone whatever the candidate does.
+    cand = u.copy()
     live = np.arange(u.shape[0])
     for _ in range(opts.max_iterations):
         if live.size == 0:
             break
-        ul = u[live]
+        cl = cand[live]
         hl = scale[live, None] * base
-        pts = ul[:, None, :] + stencil * hl[:, None, :]
+        pts = cl[:, None, :] + stencil * hl[:, None, :]
         fs = fn_u(pts, rows[live])
         evaluations += len(stencil) * live.size / batch
         f0 = fs[:, center]
@@ -204,32 +219,51 @@ def maximize_in_box(
             hess[:, pair_j, pair_i] = mixed
         lam, vec = np.linalg.eigh(hess)
         curvature = np.maximum(np.abs(lam), 1e-9 * np.max(np.abs(lam), axis=-1, keepdims=True) + 1e-300)
-        step = np.einsum("bij,bj->bi", vec, np.einsum("bji,bj->bi", vec, grad) / curvature)
+        g_eig = np.einsum("bji,bj->bi", vec, grad)
+        step = np.einsum("bij,bj->bi", vec, g_eig / curvature)
+        predicted_gain = 0.5 * np.sum(g_eig * g_eig / curvature, axis=-1)
         ratio = np.max(np.abs(step) / (4.0 * hl), axis=-1)
         step = step / np.maximum(ratio, 1.0)[:, None]  # trust region: four stencil spacings
-        newton = ul + step
-        f_newton = fn_u(newton[:, None, :], rows[live])[:, 0]
-        evaluations += live.size / batch
 
         j_best = np.argmax(fs, axis=-1)
         f_sten = fs[np.arange(live.size), j_best]
-        u_sten = pts[np.arange(live.size), j_best]
-        use_newton = (f_newton >= f_sten) & (f_newton > f0)
-        use_sten = ~use_newton & (f_sten > f0)
-        u[live] = np.where(use_newton[:, None], newton, np.where(use_sten[:, None], u_sten, ul))
-        f[live] = np.where(use_newton, f_newton, np.where(use_sten, f_sten, f0))
+        f_before = f[live]
+        improved = f_sten > f_before
+        u[live] = np.where(improved[:, None], pts[np.arange(live.size), j_best], u[live])
+        f[live] = np.where(improved, f_sten, f_before)
         s_now = scale[live]
         step_scale = np.clip(2.0 * np.max(np.abs(step) / base, axis=-1), scale_min, 1.0)
-        # Centre best with a negative-definite model: a local maximum at this resolution, and the true
-        # one lies within the Newton step; otherwise shrink fourfold. Accepted Newton steps set the
-        # spacing (it grows back when the trust region clipped the step).
         at_max = np.all(lam < 0.0, axis=-1)
-        scale[live] = np.where(
-            use_newton,
-            step_scale,
-            np.where(use_sten, s_now, np.where(at_max, np.minimum(step_scale, s_now / 4.0), s_now / 4.0)),
+        # Centred on the best point so far, or a better stencil point that the model's Newton point
+        # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
+        # point: move there at the same spacing. Neither: back to the best point, four times finer.
+        centre_best = (j_best == center) & (f0 >= f_before)
+        # the model's value at the (clipped) Newton point, with the -|lambda| curvature
+        s_eig = np.einsum("bji,bj->bi", vec, step)
+        f_model = f0 + np.sum(g_eig * s_eig - 0.5 * curvature * s_eig * s_eig, axis=-1)
+        newton = centre_best | (improved & (f_model > f_sten))
+        moved = improved & ~newton
+        cand[live] = np.where(newton[:, None], cl + step, u[live])
+        scale[live] = np.where(newton, step_scale, np.where(moved, s_now, s_now / 4.0))
+        # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
+        # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
+        # a flat direction would let the point itself keep moving.
+        flat = (
+            centre_best
+            & at_max
+            & (s_now < 1e-2)
+            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(f[live])))
         )
-        live = live[scale[live] > scale_min]
+        live = live[(scale[live] > scale_min) & ~flat]
+
+    # The last Newton candidates were never centred: evaluate them all in one call.
+    pending = np.flatnonzero(np.any(cand != u, axis=-1))
+    if pending.size:
+        f_cand = fn_u(cand[pending, None, :], rows[pending])[:, 0]
+        evaluations += pending.size / batch
+        better = f_cand > f[pending]
+        u[pending[better]] = cand[pending[better]]
+        f[pending[better]] = f_cand[better]
 
     f = f.reshape(batch, s_count)
     best = np.argmax(f, axis=1)
