@@ -103,28 +103,30 @@ def whitened_gain(dx: FloatArray, dy: FloatArray, dz: FloatArray, lower: list[Fl
 
 
 def _log_det_identity_plus_gram(u: list[FloatArray], k: int) -> FloatArray:
-    """``log det(I_k + U U^T)`` where ``U[..., i, j] = u[j][..., i, m]``; returns ``(..., M)``."""
+    """``log det(I_k + U U^T)`` where ``U[..., i, j] = u[j][..., i, m]``; returns ``(..., M)``.
+
+    Closed forms for ``k <= 3`` with each row taken as a view once (the planners' hot path is bound by
+    the number of array operations, not by arithmetic).
+    """
+    if k > 3:
+        U = np.stack(u, axis=-1)  # (..., k, M, 3)
+        U = np.moveaxis(U, -2, -3)  # (..., M, k, 3)
+        gram = U @ np.swapaxes(U, -1, -2)
+        return np.linalg.slogdet(np.eye(k) + gram)[1]
+    rows = [[c[..., i, :] for c in u] for i in range(k)]
 
     def s(a: int, b: int) -> FloatArray:
-        return (
-            u[0][..., a, :] * u[0][..., b, :]
-            + u[1][..., a, :] * u[1][..., b, :]
-            + u[2][..., a, :] * u[2][..., b, :]
-        )
+        (xa, ya, za), (xb, yb, zb) = rows[a], rows[b]
+        return xa * xb + ya * yb + za * zb
 
     if k == 1:
         return np.log1p(s(0, 0))
     if k == 2:
         a, b, c = s(0, 0), s(0, 1), s(1, 1)
         return np.log((1.0 + a) * (1.0 + c) - b * b)
-    if k == 3:
-        a, b, c = 1.0 + s(0, 0), s(0, 1), s(0, 2)
-        d, e, f = 1.0 + s(1, 1), s(1, 2), 1.0 + s(2, 2)
-        return np.log(a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c))
-    U = np.stack(u, axis=-1)  # (..., k, M, 3)
-    U = np.moveaxis(U, -2, -3)  # (..., M, k, 3)
-    gram = U @ np.swapaxes(U, -1, -2)
-    return np.linalg.slogdet(np.eye(k) + gram)[1]
+    a, b, c = 1.0 + s(0, 0), s(0, 1), s(0, 2)
+    d, e, f = 1.0 + s(1, 1), s(1, 2), 1.0 + s(2, 2)
+    return np.log(a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c))
 
 
 def information_gain_reference(
