@@ -13,7 +13,6 @@ from oceanloc.cli import root
 from oceanloc.cli._common import console, err_console, progress_bar, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.planning.dop import MEASUREMENT_KINDS, hdop_map, optimize_placement
-from oceanloc.report import flock_figures
 
 app = typer.Typer(
     help="Horizontal dilution of precision: maps and HDOP-optimal node placement.", no_args_is_help=True
@@ -57,6 +56,8 @@ def dop_map(
     netcdf: Annotated[Path | None, typer.Option("--netcdf", help="Write the map as NetCDF (xarray).")] = None,
 ) -> None:
     """HDOP as one more node moves over a grid around fixed nodes and a target (thesis Figs. 32, 48)."""
+    from oceanloc.report import flock_figures
+
     _check_kind(kind)
     if not sigma > 0:
         raise ConfigError(f"--sigma must be positive, got {sigma}")
@@ -115,6 +116,8 @@ def dop_place(
     json_path: Annotated[Path | None, typer.Option("--json", help="Write the placement as JSON.")] = None,
 ) -> None:
     """HDOP-optimal placement of nodes around a target within stand-off ranges (thesis Figs. 34-35)."""
+    from oceanloc.report import flock_figures
+
     _check_kind(kind)
     if not sigma > 0:
         raise ConfigError(f"--sigma must be positive, got {sigma}")

@@ -18,7 +18,6 @@ from oceanloc.io.paths import write_path_csv, write_path_geojson
 from oceanloc.planning.drift_rrt.planner import make_planner
 from oceanloc.planning.drift_rrt.problem import PlanBudget, problem_from_scenario
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
-from oceanloc.report.drift_figures import paths_figure, tree_figure
 
 
 def _origin(text: str | None) -> LocalProjection | None:
@@ -51,6 +50,8 @@ def drift_plan(
     ),
 ) -> None:
     """Plan the least-energy drift/flight route of a scenario; print its summary, write PNG, CSV, GeoJSON."""
+    from oceanloc.report.drift_figures import paths_figure, tree_figure
+
     sc = load_drift_scenario(scenario)
     name = planner or sc.planner
     if name not in DRIFT_PLANNERS:

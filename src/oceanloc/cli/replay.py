@@ -27,7 +27,6 @@ from oceanloc.estimation.gnssa import GnssaOptions
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.geo.enu import EnuOrigin
 from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
-from oceanloc.report.replay_figures import replay_curves_figure, replay_tracks_figure
 from oceanloc.reproduce import garcia2019_replay as rep
 from oceanloc.sim.logs import PIER_ORIGIN
 from oceanloc.sim.replay import DEFAULT_PLANNERS, RecordSet, ReplaySettings, planner_label, planner_settings
@@ -387,6 +386,8 @@ def _convergence_table(exp: rep.ReplayExperiment, *, unit_m: float = 1.0) -> Tab
 
 
 def _figures(exp: rep.ReplayExperiment, out: Path, stem: str, *, unit_m: float) -> None:
+    from oceanloc.report.replay_figures import replay_curves_figure, replay_tracks_figure
+
     replay_curves_figure(
         exp.studies, 0, out / f"{stem}_replay_curves.png", f"{exp.records.name}: replay on recorded data",
         unit_m=unit_m,

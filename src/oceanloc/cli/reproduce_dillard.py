@@ -21,7 +21,6 @@ from oceanloc.cli._common import (
 )
 from oceanloc.config.flock import load_flock_scenario
 from oceanloc.evaluation.montecarlo import open_executor
-from oceanloc.report import flock_figures
 from oceanloc.reproduce.dillard_filters import (
     METRICS,
     THESIS_RUN_TIME_S,
@@ -115,6 +114,8 @@ def dillard_filters(
     scheduler: Scheduler = None,
 ) -> None:
     """Thesis Table 2: EKF vs UKF bearing-only tracking by four drifting nodes (Chapter III.E)."""
+    from oceanloc.report import flock_figures
+
     sc = load_flock_scenario(scenario)
     if duration is not None:
         sc = sc.with_overrides(duration_s=duration)
@@ -171,6 +172,8 @@ def dillard_lab_tdoa(
     scheduler: Scheduler = None,
 ) -> None:
     """Thesis lab test: TDOA UKF, three nodes in a Y, random target; residual vs HDOP (Chapter V.C)."""
+    from oceanloc.report import flock_figures
+
     with open_executor(scheduler, workers) as executor, progress_bar(runs, "Monte Carlo runs") as advance:
         res = reproduce_dillard_lab_tdoa(scenario, runs=runs, seed=seed, executor=executor, progress=advance)
     print_lab(res)

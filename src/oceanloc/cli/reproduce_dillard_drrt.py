@@ -16,7 +16,6 @@ from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
 from oceanloc.planning.drift_rrt.problem import PlanBudget
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
-from oceanloc.report.drift_figures import energy_figure, paths_figure, tree_figure
 from oceanloc.reproduce.dillard_drrt import (
     THESIS_DIRECT_FLIGHT_WH,
     THESIS_TABLE4,
@@ -142,6 +141,8 @@ def _print_report(report: DillardReport, runs: int, iterations: int) -> None:
 
 
 def _figures(folder: Path, report: DillardReport, seed: int, iterations: int) -> None:
+    from oceanloc.report.drift_figures import energy_figure, paths_figure, tree_figure
+
     problem = thesis_problem()
     rng = run_generators(seed, [0])[0]
     single = plan_thesis(problem, rng, options=ThesisOptions(mode="single", keep_tree=True))

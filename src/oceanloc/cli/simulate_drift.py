@@ -25,7 +25,6 @@ from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor, run_chunked
 from oceanloc.planning.drift_rrt.planner import make_planner
 from oceanloc.planning.drift_rrt.problem import problem_from_scenario
-from oceanloc.report.drift_figures import following_figure, paths_figure
 from oceanloc.sim.drifters import swap_positions
 from oceanloc.sim.path_following import FollowingTask, follow_plans, merge_following, summarize_following
 
@@ -55,6 +54,8 @@ def drift_follow(
     scheduler: Scheduler = None,
 ) -> None:
     """Follow a plan with watch circles in a perturbed current; arrival rate, extra energy, replans."""
+    from oceanloc.report.drift_figures import following_figure
+
     sc = load_drift_scenario(scenario)
     name, plan_fn = _planner(planner, sc.planner)
     problem = problem_from_scenario(sc)
@@ -114,6 +115,8 @@ def drift_swap(
     figures: Annotated[Path | None, typer.Option("--figures", help="Write PNG figures here.")] = None,
 ) -> None:
     """Two drifters swap positions (thesis Figs. 68-71): both plans, then both followed in a true current."""
+    from oceanloc.report.drift_figures import following_figure, paths_figure
+
     sc = load_drift_scenario(scenario)
     name, plan_fn = _planner(planner, sc.planner)
     problem = problem_from_scenario(sc)

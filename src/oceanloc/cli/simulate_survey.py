@@ -28,7 +28,6 @@ from oceanloc.errors import ConfigError
 from oceanloc.evaluation.ellipses import confidence_ellipse
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.evaluation.survey import SurveyMonteCarlo, survey_monte_carlo
-from oceanloc.report import survey_figures
 from oceanloc.sim.survey import SurveyRuns, simulate_surveys
 
 _REPORT_EPOCHS = (3, 7, 30)
@@ -97,6 +96,8 @@ def _with_overrides(
 
 
 def _single_run(scen: SurveyScenario, seed: int, json_path: Path | None, figures: Path | None) -> None:
+    from oceanloc.report import survey_figures
+
     run = simulate_surveys(scen, [0], seed)
     final = run.estimates_m[0, -1]
     cov = run.covariances_m2[0, -1]
@@ -171,6 +172,8 @@ def _epoch_table(run: SurveyRuns, scen: SurveyScenario) -> Table:
 
 
 def _monte_carlo_report(result: SurveyMonteCarlo, json_path: Path | None, figures: Path | None) -> None:
+    from oceanloc.report import survey_figures
+
     scen = result.scenario
     epochs = sorted({n for n in (*_REPORT_EPOCHS, scen.epochs) if n <= scen.epochs})
     table = Table(title=f"{scen.name}: {result.runs} runs, planner {scen.planner.label}, seed {result.seed}")

@@ -14,7 +14,6 @@ from oceanloc.cli.dop import parse_point
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.time_delay import DELAY_METHODS, estimate_delay
 from oceanloc.io.wav import common_sample_rate, read_wav
-from oceanloc.report import flock_figures
 
 
 @root.app.command("tdoa")
@@ -35,6 +34,8 @@ def tdoa(
     Cross-correlation or GCC-PHAT with band-limited sub-sample interpolation of the peak; the peak ratio
     (main correlation peak over the largest value outside its main lobe) says how unambiguous it is.
     """
+    from oceanloc.report import flock_figures
+
     if method not in DELAY_METHODS:
         raise ConfigError(f"--method must be one of {', '.join(DELAY_METHODS)}; got '{method}'")
     band_hz = None

@@ -38,7 +38,6 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
@@ -548,6 +547,8 @@ def _variance_components(
         return float(np.sum(np.log(var) + e2 / var))
 
     start = np.log([max(np.sqrt(np.mean(e2)), 1e-3), 1e-2])
+    from scipy.optimize import minimize
+
     q = minimize(nll, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-6}).x
     return float(max(np.exp(q[0]), 1e-4)), float(np.exp(q[1])) if with_beta else 0.0
 

@@ -34,8 +34,6 @@ from dataclasses import dataclass
 from typing import Literal, TypeAlias
 
 import numpy as np
-import scipy.fft
-import scipy.optimize
 
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError, DataError
@@ -81,6 +79,8 @@ class DelayEstimate:
 def _cross_spectrum(
     a: FloatArray, b: FloatArray, method: str, sample_rate_hz: float, band_hz: tuple[float, float] | None
 ) -> tuple[np.ndarray, int]:
+    import scipy.fft
+
     n_fft = scipy.fft.next_fast_len(a.size + b.size - 1, real=True)
     spec = scipy.fft.rfft(a, n_fft) * np.conj(scipy.fft.rfft(b, n_fft))
     if method == "gcc-phat":
@@ -140,6 +140,8 @@ def estimate_delay(
     -------
     DelayEstimate
     """
+    import scipy.fft
+
     x = np.asarray(a, dtype=float)
     y = np.asarray(b, dtype=float)
     if x.ndim != 1 or y.ndim != 1 or x.size < 2 or y.size < 2:
@@ -176,7 +178,9 @@ def estimate_delay(
     peak = float(lags[i])
     if interpolation == "sinc":
         weights = _one_sided_weights(spec.size, n_fft)
-        res = scipy.optimize.minimize_scalar(
+        from scipy.optimize import minimize_scalar
+
+        res = minimize_scalar(
             lambda t: -_correlation_at(spec, weights, n_fft, t),
             bounds=(peak - 1.0, peak + 1.0),
             method="bounded",

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError
@@ -52,6 +51,8 @@ def ellipse_scale(confidence: float) -> float:
     """``c = sqrt(chi2_2.ppf(confidence))``; 2.4477 for 95 %."""
     if not 0.0 < confidence < 1.0:
         raise ConfigError(f"confidence must be in (0, 1), got {confidence}")
+    from scipy import stats
+
     return float(np.sqrt(stats.chi2.ppf(confidence, 2)))
 
 

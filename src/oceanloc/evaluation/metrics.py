@@ -8,7 +8,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError
@@ -90,7 +89,7 @@ def chi_square_check(samples: ArrayLike, dof: int) -> ChiSquareCheck:
         dof=int(dof),
         runs=int(x.size),
         mean_band=(dof - half, dof + half),
-        p_value=float(stats.kstest(x, stats.chi2(dof).cdf).pvalue),
+        p_value=float(_stats().kstest(x, _stats().chi2(dof).cdf).pvalue),
     )
 
 
@@ -123,3 +122,10 @@ def log_det_stats(log_det: ArrayLike) -> LogDetStats:
         std=x.std(axis=0, ddof=1) if x.shape[0] > 1 else np.zeros(x.shape[1:]),
         runs=x.shape[0],
     )
+
+
+def _stats():
+    """``scipy.stats``, imported on first use (it adds a second to the command line's start)."""
+    from scipy import stats
+
+    return stats

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import scipy.io.wavfile
 
 from oceanloc._typing import FloatArray
 from oceanloc.errors import DataError
@@ -63,6 +62,8 @@ def read_wav(path: str | Path) -> Recording:
     p = Path(path)
     try:
         with warnings.catch_warnings():
+            import scipy.io.wavfile
+
             warnings.simplefilter("ignore", scipy.io.wavfile.WavFileWarning)
             rate, data = scipy.io.wavfile.read(p)
     except FileNotFoundError:

@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from oceanloc._typing import ArrayLike, FloatArray
 
@@ -113,6 +112,8 @@ def discretize(system: ArrayLike, noise_input: ArrayLike, dt_s: float) -> tuple[
     block[:n, :n] = -a
     block[:n, n:] = g
     block[n:, n:] = a.T
+    import scipy.linalg
+
     e = scipy.linalg.expm(block * dt_s)
     transition = e[n:, n:].T
     q = transition @ e[:n, n:]

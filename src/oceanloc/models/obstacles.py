@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray
 from oceanloc.errors import ConfigError
@@ -67,6 +66,8 @@ class OccupancyGrid:
         if margin_m <= 0 or not self.occupied.any():
             return self
         # Distance from each free cell centre to the nearest occupied cell centre, minus half a cell.
+        from scipy import ndimage
+
         dist = ndimage.distance_transform_edt(~self.occupied) * self.cell_m - 0.5 * self.cell_m
         return OccupancyGrid(
             x0_m=self.x0_m, y0_m=self.y0_m, cell_m=self.cell_m, occupied=self.occupied | (dist <= margin_m)

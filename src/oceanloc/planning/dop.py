@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.optimize
 
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError
@@ -347,6 +346,8 @@ def optimize_placement(
 
     finals = np.empty_like(initial)
     for s, x0 in enumerate(initial):
+        import scipy.optimize
+
         res = scipy.optimize.minimize(fun_and_grad, x0, jac=True, method="L-BFGS-B", bounds=bounds)
         finals[s] = res.x
         if progress:

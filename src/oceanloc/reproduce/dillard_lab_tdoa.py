@@ -15,7 +15,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.stats
 
 from oceanloc._typing import FloatArray
 from oceanloc.config.flock import FlockScenario, load_flock_scenario
@@ -71,6 +70,8 @@ class _LabTask:
         pearson = np.array(
             [np.corrcoef(residual[i, settled], res.hdop_m[i, settled])[0, 1] for i in range(r)]
         )
+        import scipy.stats
+
         spearman = np.array(
             [scipy.stats.spearmanr(residual[i, settled], res.hdop_m[i, settled]).statistic for i in range(r)]
         )

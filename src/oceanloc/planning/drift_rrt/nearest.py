@@ -8,10 +8,14 @@ points; the rebuilds cost ``O(n log n)`` each, ``n / rebuild_every`` times in al
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.spatial import cKDTree
 
 from oceanloc._typing import FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 
 class GrowingNearest:
@@ -55,6 +59,8 @@ class GrowingNearest:
     def query(self, x_m: float, y_m: float, k: int, exclude: int = -1) -> tuple[FloatArray, IntArray]:
         """Distances and indices of the ``k`` nearest points, ascending; ``exclude`` is left out."""
         if self._n - self._n_tree > self._rebuild_every:
+            from scipy.spatial import cKDTree
+
             self._tree = cKDTree(self._points[: self._n])
             self._n_tree = self._n
         kk = k + (1 if exclude >= 0 else 0)
