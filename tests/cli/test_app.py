@@ -35,3 +35,17 @@ def test_user_error_is_one_line_without_traceback(capsys):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert "error:" in err and "Traceback" not in err
+
+
+def test_the_command_line_starts_without_scipy_or_matplotlib():
+    # Every `oceanloc` call (e.g. `survey add` during a survey) pays for what the app imports at start;
+    # scipy and matplotlib add seconds and are imported by the commands that use them.
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, oceanloc.cli.app; heavy = {'scipy', 'matplotlib', 'xarray', 'distributed'}; "
+        "print(sorted({m.split('.')[0] for m in sys.modules} & heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
