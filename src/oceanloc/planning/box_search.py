@@ -201,19 +201,22 @@ def maximize_in_box(
     # point so far after a failed candidate. ``u`` and ``f`` hold the best point seen, so the search is
     # monotone whatever the candidate does.
     cand = u.copy()
-    live = np.arange(u.shape[0])
+    # The live subproblems' state is kept compacted (``lu``, ``lf`` best point and value, ``lc`` candidate,
+    # ``ls`` spacing, ``lr`` problem row, ``lidx`` position in ``u``/``f``); retiring ones are written back.
+    lidx = np.arange(u.shape[0])
+    lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), scale.copy(), rows.copy()
+    ar = np.arange(lidx.size)
     for _ in range(opts.max_iterations):
-        if live.size == 0:
+        if lidx.size == 0:
             break
-        cl = cand[live]
-        hl = scale[live, None] * base
-        pts = cl[:, None, :] + stencil * hl[:, None, :]
-        fs = fn_u(pts, rows[live])
-        evaluations += len(stencil) * live.size / batch
+        hl = ls[:, None] * base
+        pts = lc[:, None, :] + stencil * hl[:, None, :]
+        fs = fn_u(pts, lr)
+        evaluations += len(stencil) * lidx.size / batch
         f0 = fs[:, center]
         f_plus, f_minus = fs[:, plus], fs[:, minus]
         grad = (f_plus - f_minus) / (2.0 * hl)
-        hess = np.empty((live.size, d, d))
+        hess = np.empty((lidx.size, d, d))
         hess[:, diag, diag] = (f_plus - 2.0 * f0[:, None] + f_minus) / hl**2
         if pair_i.size:
             mixed = (fs[:, corners[0]] - fs[:, corners[1]] - fs[:, corners[2]] + fs[:, corners[3]]) / (
@@ -223,32 +226,34 @@ def maximize_in_box(
             hess[:, pair_j, pair_i] = mixed
         lam, vec = np.linalg.eigh(hess)
         curvature = np.maximum(np.abs(lam), 1e-9 * np.max(np.abs(lam), axis=-1, keepdims=True) + 1e-300)
-        g_eig = np.einsum("bji,bj->bi", vec, grad)
-        step = np.einsum("bij,bj->bi", vec, g_eig / curvature)
+        g_eig = (grad[:, None, :] @ vec)[:, 0]  # V^T g
+        step = (vec @ (g_eig / curvature)[:, :, None])[:, :, 0]
         predicted_gain = 0.5 * np.sum(g_eig * g_eig / curvature, axis=-1)
         ratio = np.max(np.abs(step) / (4.0 * hl), axis=-1)
-        step = step / np.maximum(ratio, 1.0)[:, None]  # trust region: four stencil spacings
+        clip = np.maximum(ratio, 1.0)
+        step /= clip[:, None]  # trust region: four stencil spacings
+        s_eig = g_eig / curvature / clip[:, None]  # V^T step
 
+        n = lidx.size
+        ar_n = ar[:n]
         j_best = np.argmax(fs, axis=-1)
-        f_sten = fs[np.arange(live.size), j_best]
-        f_before = f[live]
+        f_sten = fs[ar_n, j_best]
+        f_before = lf
         improved = f_sten > f_before
-        u[live] = np.where(improved[:, None], pts[np.arange(live.size), j_best], u[live])
-        f[live] = np.where(improved, f_sten, f_before)
-        s_now = scale[live]
+        lu = np.where(improved[:, None], pts[ar_n, j_best], lu)
+        lf = np.where(improved, f_sten, f_before)
+        s_now = ls
         step_scale = np.clip(2.0 * np.max(np.abs(step) / base, axis=-1), scale_min, 1.0)
         at_max = np.all(lam < 0.0, axis=-1)
         # Centred on the best point so far, or a better stencil point that the model's Newton point
         # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
         # point: move there at the same spacing. Neither: back to the best point, four times finer.
         centre_best = (j_best == center) & (f0 >= f_before)
-        # the model's value at the (clipped) Newton point, with the -|lambda| curvature
-        s_eig = np.einsum("bji,bj->bi", vec, step)
         f_model = f0 + np.sum(g_eig * s_eig - 0.5 * curvature * s_eig * s_eig, axis=-1)
         newton = centre_best | (improved & (f_model > f_sten))
         moved = improved & ~newton
-        cand[live] = np.where(newton[:, None], cl + step, u[live])
-        scale[live] = np.where(newton, step_scale, np.where(moved, s_now, s_now / 4.0))
+        lc = np.where(newton[:, None], lc + step, lu)
+        ls = np.where(newton, step_scale, np.where(moved, s_now, s_now / 4.0))
         # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
         # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
         # a flat direction would let the point itself keep moving.
@@ -256,9 +261,14 @@ def maximize_in_box(
             centre_best
             & at_max
             & (s_now < 1e-2)
-            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(f[live])))
+            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
         )
-        live = live[(scale[live] > scale_min) & ~flat]
+        keep = (ls > scale_min) & ~flat
+        if not keep.all():
+            done = ~keep
+            u[lidx[done]], f[lidx[done]], cand[lidx[done]] = lu[done], lf[done], lc[done]
+            lidx, lu, lf, lc, ls, lr = lidx[keep], lu[keep], lf[keep], lc[keep], ls[keep], lr[keep]
+    u[lidx], f[lidx], cand[lidx] = lu, lf, lc
 
     # The last Newton candidates were never centred: evaluate them all in one call.
     pending = np.flatnonzero(np.any(cand != u, axis=-1))
