@@ -13,7 +13,7 @@ from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa, survey_spread
-from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
+from oceanloc.io.gnssa import lajolla_paths, read_gnssa, survey_sound_speeds_mps
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges
 
@@ -76,7 +76,7 @@ def gnssa(
     paths = list(files) if files else lajolla_paths()
     if not files:
         err_console.print(f"no file given: using the {len(paths)} packaged La Jolla surveys")
-    speeds = _speeds(paths, list(sound_speed or []))
+    speeds = survey_sound_speeds_mps(paths, sound_speed or [])
     surveys, results = [], []
     for path, speed in zip(paths, speeds, strict=True):
         survey = read_gnssa(path)
@@ -150,22 +150,6 @@ def gnssa_json(results: list[GnssaResult]) -> dict:
     else:
         payload["spread"] = {"std_n_m": None, "std_e_m": None, "std_u_m": None}
     return payload
-
-
-def _speeds(paths: list[Path], given: list[float]) -> list[float]:
-    if len(given) == 1:
-        return given * len(paths)
-    if given and len(given) != len(paths):
-        raise ConfigError(f"--sound-speed: give one value or one per file ({len(paths)}), got {len(given)}")
-    if given:
-        return given
-    out = []
-    for p in paths:
-        c = published_sound_speed_mps(p)
-        if c is None:
-            raise ConfigError(f"{p}: no published sound speed for this file; give --sound-speed")
-        out.append(c)
-    return out
 
 
 def _print_results(results: list[GnssaResult]) -> None:

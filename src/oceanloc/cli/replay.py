@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated
 
@@ -26,7 +25,7 @@ from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.geo.enu import EnuOrigin
-from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
+from oceanloc.io.gnssa import lajolla_paths, read_gnssa, survey_sound_speeds_mps
 from oceanloc.reproduce import garcia2019_replay as rep
 from oceanloc.sim.logs import PIER_ORIGIN
 from oceanloc.sim.replay import DEFAULT_PLANNERS, RecordSet, ReplaySettings, planner_label, planner_settings
@@ -106,7 +105,7 @@ def gnssa_command(
     paths = list(files) if files else lajolla_paths()
     if not files:
         err_console.print(f"no file given: using the {len(paths)} packaged La Jolla surveys")
-    speeds = _speeds(paths, list(sound_speed or []))
+    speeds = survey_sound_speeds_mps(paths, sound_speed or [])
     sigma = _vector(prior_sigma, "--prior-sigma")
     surveys = [read_gnssa(p) for p in paths]
 
@@ -310,22 +309,6 @@ def _parse_origin(text: str) -> EnuOrigin | None:
         return None
     lat, lon, h = _vector(text, "--origin")
     return EnuOrigin(lat_deg=lat, lon_deg=lon, h_m=h)
-
-
-def _speeds(paths: Sequence[Path], given: list[float]) -> list[float]:
-    if len(given) == 1:
-        return given * len(paths)
-    if given and len(given) != len(paths):
-        raise ConfigError(f"--sound-speed: give one value or one per file ({len(paths)}), got {len(given)}")
-    if given:
-        return given
-    out = []
-    for p in paths:
-        c = published_sound_speed_mps(p)
-        if c is None:
-            raise ConfigError(f"{p}: no published sound speed for this file; give --sound-speed")
-        out.append(c)
-    return out
 
 
 def _settings_line(exp: rep.ReplayExperiment) -> str:

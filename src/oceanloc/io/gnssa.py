@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -23,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc._typing import FloatArray, IntArray
-from oceanloc.errors import DataError
+from oceanloc.errors import ConfigError, DataError
 from oceanloc.geo.enu import EnuOrigin
 from oceanloc.io.qc import QcReport, read_lines
 
@@ -109,6 +110,31 @@ def lajolla_paths() -> list[Path]:
 def published_sound_speed_mps(path: str | Path) -> float | None:
     """The published sound speed for a La Jolla file (by file stem), or None if unknown."""
     return PUBLISHED_SOUND_SPEED_MPS.get(Path(path).stem)
+
+
+def survey_sound_speeds_mps(paths: Sequence[str | Path], given: Sequence[float] = ()) -> list[float]:
+    """One sound speed per survey file: the one given for all, one given per file, or the published one.
+
+    Raises
+    ------
+    ConfigError
+        If the number given is neither one nor one per file, or a file has no published speed and none
+        was given.
+    """
+    given = list(given)
+    if len(given) == 1:
+        return given * len(paths)
+    if given and len(given) != len(paths):
+        raise ConfigError(f"--sound-speed: give one value or one per file ({len(paths)}), got {len(given)}")
+    if given:
+        return given
+    out = []
+    for p in paths:
+        c = published_sound_speed_mps(p)
+        if c is None:
+            raise ConfigError(f"{p}: no published sound speed for this file; give --sound-speed")
+        out.append(c)
+    return out
 
 
 def read_gnssa(path: str | Path) -> GnssaSurvey:
