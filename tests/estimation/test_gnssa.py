@@ -10,8 +10,8 @@ from oceanloc.estimation.gnssa import (
     GnssaProblem,
     hat_basis,
     localize_gnssa,
-    survey_spread,
 )
+from oceanloc.evaluation.repeatability import survey_spread
 from oceanloc.io.gnssa import GnssaSurvey, lajolla_paths, published_sound_speed_mps, read_gnssa
 from oceanloc.io.qc import QcReport
 from oceanloc.models.measurements import (

@@ -12,7 +12,8 @@ from rich.table import Table
 from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
-from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa, survey_spread
+from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa
+from oceanloc.evaluation.repeatability import survey_spread
 from oceanloc.io.gnssa import lajolla_paths, read_gnssa, survey_sound_speeds_mps
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges
