@@ -133,3 +133,24 @@ def test_invalid_planner_parameters_raise():
         _lookahead(0)
     with pytest.raises(ConfigError, match="speed_mps"):
         LookaheadPlanner(horizon=1, max_yaw_rate_rad_s=1.0, speed_mps=0.0, period_s=1.0, sigma_range_m=0.1)
+
+
+@pytest.mark.parametrize("m", [1, 4])
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_tensor_grid_evaluation_equals_the_direct_objective(k, m):
+    from oceanloc.planning.measurement_sites import _YawRateObjective
+    from oceanloc.planning.random_problems import random_planning_states
+
+    states = random_planning_states(np.random.default_rng(3), 5, m)
+    planner = LookaheadPlanner(
+        horizon=k, max_yaw_rate_rad_s=0.5, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
+    )
+    objective = _YawRateObjective(states, planner)
+    axes = [np.linspace(-0.5, 0.5, 7) * (j + 1) / 3 for j in range(k)]
+    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, k)
+    rows = np.arange(5)
+    direct = objective(np.broadcast_to(mesh, (5, *mesh.shape)), rows)
+    # the same closed-form determinant in another order: it cancels (Gram entries reach 1e4 for well
+    # localized transponders), so the two agree to ~1e-10 relative, not to the last bit
+    np.testing.assert_allclose(objective.tensor_grid(axes, rows), direct, rtol=1e-8)
+    assert objective.tensor_grid([axes[0]] * 4, rows) is None  # k > 3: the direct evaluation

@@ -194,6 +194,58 @@ class _YawRateObjective:
         dy = c[:, 4] - py[..., None]
         return whitened_gain(dx, dy, c[:, 5], [c[:, 6 + i] for i in range(6)]).sum(axis=-1)
 
+    def tensor_grid(self, axes: list[FloatArray], rows: IntArray) -> FloatArray | None:
+        """The objective on the tensor grid ``axes[0] x ... x axes[k-1]`` of yaw rates, ``(b, prod n_j)``
+        in C order, or None for ``k > 3``.
+
+        Step ``j`` of the rollout depends only on the first ``j + 1`` yaw rates, so its sites and
+        line-of-sight vectors are computed on ``n_0 ... n_j`` grid points, not on the whole grid: the
+        grid stage of the search costs about half the direct evaluation.
+        """
+        k = len(axes)
+        if k > 3:
+            return None
+        table = self.table[rows]
+        m = table.shape[-1]
+        lead = (table.shape[0],) + (1,) * k  # (b, 1, ..., 1) before the transponder axis
+
+        def per_problem(i: int) -> FloatArray:  # (b, 1, ..., 1)
+            return table[:, i, 0].reshape(lead)
+
+        def per_transponder(i: int) -> FloatArray:  # (b, 1, ..., 1, M)
+            return table[:, i].reshape(*lead, m)
+
+        yaw, px, py = per_problem(2), per_problem(0), per_problem(1)
+        dz = per_transponder(5)
+        l00, l10, l20, l11, l21, l22 = (per_transponder(6 + i) for i in range(6))
+        rows_u = []
+        for j, ax in enumerate(axes):
+            shape = [1] * (k + 1)
+            shape[j + 1] = ax.size
+            yaw = yaw + ax.reshape(shape) * self.period_s
+            px = px + np.cos(yaw) * self.step_m
+            py = py + np.sin(yaw) * self.step_m
+            dx = per_transponder(3) - px[..., None]
+            dy = per_transponder(4) - py[..., None]
+            inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + dz * dz)
+            rows_u.append(
+                ((dx * l00 + dy * l10 + dz * l20) * inv_r, (dy * l11 + dz * l21) * inv_r, dz * l22 * inv_r)
+            )
+
+        def s(a: int, b: int) -> FloatArray:
+            (xa, ya, za), (xb, yb, zb) = rows_u[a], rows_u[b]
+            return xa * xb + ya * yb + za * zb
+
+        if k == 1:
+            gain = np.log1p(s(0, 0))
+        elif k == 2:
+            gain = np.log((1.0 + s(0, 0)) * (1.0 + s(1, 1)) - s(0, 1) ** 2)
+        else:
+            a, b, c = 1.0 + s(0, 0), s(0, 1), s(0, 2)
+            d, e, f = 1.0 + s(1, 1), s(1, 2), 1.0 + s(2, 2)
+            gain = np.log(a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c))
+        return gain.sum(axis=-1).reshape(table.shape[0], -1)
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class GreedyPlanner:
