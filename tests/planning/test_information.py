@@ -41,3 +41,18 @@ def test_block_diagonal_log_det_is_sum_over_transponders():
     for i, b in enumerate(blocks):
         full[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b
     assert log_det_information(np.array(blocks)).sum() == pytest.approx(np.linalg.slogdet(full)[1], rel=1e-12)
+
+
+def test_closed_form_log_det_matches_slogdet_and_refuses_four_rows():
+    from oceanloc.errors import ConfigError
+    from oceanloc.planning.information import log_det_identity_plus_gram
+
+    u = np.random.default_rng(4).normal(size=(3, 3, 10))  # rows, components, batch
+    for k in (1, 2, 3):
+        U = np.moveaxis(u[:k], -1, 0)  # (10, k, 3)
+        expected = np.linalg.slogdet(np.eye(k) + U @ np.swapaxes(U, 1, 2))[1]
+        np.testing.assert_allclose(
+            log_det_identity_plus_gram([tuple(r) for r in u[:k]]), expected, rtol=1e-12
+        )
+    with pytest.raises(ConfigError, match="1 to 3 rows"):
+        log_det_identity_plus_gram([tuple(u[0])] * 4)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from oceanloc._typing import ArrayLike, FloatArray
+from oceanloc.errors import ConfigError
 from oceanloc.models.measurements import range_jacobian
 
 
@@ -96,34 +97,54 @@ def whitened_gain(dx: FloatArray, dy: FloatArray, dz: FloatArray, lower: list[Fl
     -------
     (..., M) float
     """
+    u = whitened_line_of_sight(dx, dy, dz, lower)
+    k = dx.shape[-2]
+    if k > 3:
+        U = np.moveaxis(np.stack(np.broadcast_arrays(*u), axis=-1), -2, -3)  # (..., M, k, 3)
+        return np.linalg.slogdet(np.eye(k) + U @ np.swapaxes(U, -1, -2))[1]
+    return log_det_identity_plus_gram([tuple(c[..., i, :] for c in u) for i in range(k)])
+
+
+def whitened_line_of_sight(
+    dx: FloatArray, dy: FloatArray, dz: FloatArray, lower: list[FloatArray]
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``L^T (p_hat - site) / r``, the unit line of sight whitened by :func:`scaled_cholesky`'s ``L``.
+
+    Parameters
+    ----------
+    dx, dy, dz : (...) float
+        Components of ``p_hat_m - site`` (broadcastable).
+    lower : list of six (...) float
+        ``L00, L10, L20, L11, L21, L22``.
+
+    Returns
+    -------
+    tuple of three (...) float
+    """
     l00, l10, l20, l11, l21, l22 = lower
     inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + dz * dz)
-    u = [(dx * l00 + dy * l10 + dz * l20) * inv_r, (dy * l11 + dz * l21) * inv_r, dz * (l22 * inv_r)]
-    return _log_det_identity_plus_gram(u, dx.shape[-2])
+    return (dx * l00 + dy * l10 + dz * l20) * inv_r, (dy * l11 + dz * l21) * inv_r, dz * (l22 * inv_r)
 
 
-def _log_det_identity_plus_gram(u: list[FloatArray], k: int) -> FloatArray:
-    """``log det(I_k + U U^T)`` where ``U[..., i, j] = u[j][..., i, m]``; returns ``(..., M)``.
+def log_det_identity_plus_gram(rows: list[tuple[FloatArray, FloatArray, FloatArray]]) -> FloatArray:
+    """``log det(I_k + U U^T)`` for ``k = len(rows) <= 3``, row ``i`` of ``U`` given as its three
+    components (broadcastable arrays; rows of different shapes broadcast together).
 
-    Closed forms for ``k <= 3`` with each row taken as a view once (the planners' hot path is bound by
-    the number of array operations, not by arithmetic).
+    Closed forms, each row touched once: the planners' hot path is bound by the number of array
+    operations, not by arithmetic.
     """
-    if k > 3:
-        U = np.stack(u, axis=-1)  # (..., k, M, 3)
-        U = np.moveaxis(U, -2, -3)  # (..., M, k, 3)
-        gram = U @ np.swapaxes(U, -1, -2)
-        return np.linalg.slogdet(np.eye(k) + gram)[1]
-    rows = [[c[..., i, :] for c in u] for i in range(k)]
 
     def s(a: int, b: int) -> FloatArray:
         (xa, ya, za), (xb, yb, zb) = rows[a], rows[b]
         return xa * xb + ya * yb + za * zb
 
+    k = len(rows)
     if k == 1:
         return np.log1p(s(0, 0))
     if k == 2:
-        a, b, c = s(0, 0), s(0, 1), s(1, 1)
-        return np.log((1.0 + a) * (1.0 + c) - b * b)
+        return np.log((1.0 + s(0, 0)) * (1.0 + s(1, 1)) - s(0, 1) ** 2)
+    if k != 3:
+        raise ConfigError(f"closed forms exist for 1 to 3 rows, got {k}")
     a, b, c = 1.0 + s(0, 0), s(0, 1), s(0, 2)
     d, e, f = 1.0 + s(1, 1), s(1, 2), 1.0 + s(2, 2)
     return np.log(a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c))

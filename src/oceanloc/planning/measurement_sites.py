@@ -30,7 +30,13 @@ from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import ConfigError
 from oceanloc.models.vehicles import unicycle_rollout
 from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
-from oceanloc.planning.information import information_gain, scaled_cholesky, whitened_gain
+from oceanloc.planning.information import (
+    information_gain,
+    log_det_identity_plus_gram,
+    scaled_cholesky,
+    whitened_gain,
+    whitened_line_of_sight,
+)
 from oceanloc.planning.status import PlanStatus
 
 
@@ -217,7 +223,7 @@ class _YawRateObjective:
 
         yaw, px, py = per_problem(2), per_problem(0), per_problem(1)
         dz = per_transponder(5)
-        l00, l10, l20, l11, l21, l22 = (per_transponder(6 + i) for i in range(6))
+        lower = [per_transponder(6 + i) for i in range(6)]
         rows_u = []
         for j, ax in enumerate(axes):
             shape = [1] * (k + 1)
@@ -227,23 +233,8 @@ class _YawRateObjective:
             py = py + np.sin(yaw) * self.step_m
             dx = per_transponder(3) - px[..., None]
             dy = per_transponder(4) - py[..., None]
-            inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + dz * dz)
-            rows_u.append(
-                ((dx * l00 + dy * l10 + dz * l20) * inv_r, (dy * l11 + dz * l21) * inv_r, dz * l22 * inv_r)
-            )
-
-        def s(a: int, b: int) -> FloatArray:
-            (xa, ya, za), (xb, yb, zb) = rows_u[a], rows_u[b]
-            return xa * xb + ya * yb + za * zb
-
-        if k == 1:
-            gain = np.log1p(s(0, 0))
-        elif k == 2:
-            gain = np.log((1.0 + s(0, 0)) * (1.0 + s(1, 1)) - s(0, 1) ** 2)
-        else:
-            a, b, c = 1.0 + s(0, 0), s(0, 1), s(0, 2)
-            d, e, f = 1.0 + s(1, 1), s(1, 2), 1.0 + s(2, 2)
-            gain = np.log(a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c))
+            rows_u.append(whitened_line_of_sight(dx, dy, dz, lower))
+        gain = log_det_identity_plus_gram(rows_u)
         return gain.sum(axis=-1).reshape(table.shape[0], -1)
 
 
