@@ -56,29 +56,15 @@ class CorrelatedRangeProblem:
 
     Attributes
     ----------
-    sensor_m : (n, 3) float
-        Vehicle positions, metres.
-    ranges_m : (n,) float
-    t_s : (n,) float
-        Range epochs, seconds.
-    sigma_white_m : float
-        White (USBL) range noise, metres.
-    sigma_gps_enu_m : (3,) float
-        GPS error standard deviation per axis, metres.
-    correlation_s : float
-        GPS error time constant, seconds.
-    used : (n,) bool
+    sensor_m : (m, 3) float
+        Vehicle positions of the ranges used, metres.
+    ranges_m : (m,) float
     chol : (m, m) float
-        Lower Cholesky factor of the used ranges' covariance, built at a linearization point.
+        Lower Cholesky factor of their covariance, built at a linearization point by :meth:`at`.
     """
 
     sensor_m: FloatArray
     ranges_m: FloatArray
-    t_s: FloatArray
-    sigma_white_m: float
-    sigma_gps_enu_m: FloatArray
-    correlation_s: float
-    used: BoolArray
     chol: FloatArray
 
     @classmethod
@@ -94,23 +80,19 @@ class CorrelatedRangeProblem:
         sigma_gps_enu_m: FloatArray,
         correlation_s: float,
     ) -> CorrelatedRangeProblem:
-        """The problem with its covariance built at the lines of sight from ``point_m`` (3,)."""
-        h = range_jacobian(point_m, sensor_m[used])
+        """The used ranges, with their covariance built at the lines of sight from ``point_m`` (3,).
+
+        ``sensor_m (n, 3)``, ``ranges_m (n,)``, ``t_s (n,)`` (seconds) and ``used (n,)``; white noise
+        ``sigma_white_m``, GPS sigma per axis ``sigma_gps_enu_m (3,)`` with time constant ``correlation_s``.
+        """
+        sensors = sensor_m[used]
+        h = range_jacobian(point_m, sensors)
         t = t_s[used]
         cov = (
             (h * np.square(sigma_gps_enu_m)) @ h.T * np.exp(-np.abs(t[:, None] - t[None, :]) / correlation_s)
         )
         cov[np.diag_indices_from(cov)] += sigma_white_m**2
-        return cls(
-            sensor_m,
-            ranges_m,
-            t_s,
-            sigma_white_m,
-            np.asarray(sigma_gps_enu_m, dtype=float),
-            correlation_s,
-            used,
-            np.linalg.cholesky(cov),
-        )
+        return cls(sensors, ranges_m[used], np.linalg.cholesky(cov))
 
     @property
     def batch_size(self) -> int:
@@ -119,9 +101,8 @@ class CorrelatedRangeProblem:
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
         from scipy.linalg import solve_triangular
 
-        sensors = self.sensor_m[self.used]
-        resid = self.ranges_m[self.used] - range_m(x[:, None, :], sensors)[0]
-        jac = range_jacobian(x[:, None, :], sensors)[0]
+        resid = self.ranges_m - range_m(x[:, None, :], self.sensor_m)[0]
+        jac = range_jacobian(x[:, None, :], self.sensor_m)[0]
         w_resid = solve_triangular(self.chol, resid, lower=True)
         w_jac = solve_triangular(self.chol, jac, lower=True)
         return w_resid[None, :], w_jac[None, :, :]

@@ -199,7 +199,6 @@ def maximize_in_box(
     u = mesh[starts.reshape(-1)]
     f = np.take_along_axis(values, starts, axis=1).reshape(-1)
     base = np.array([ax[1] - ax[0] for ax in axes]) / 2.0
-    scale = np.ones(u.shape[0])  # stencil spacing is scale * base, one scale per subproblem
     scale_min = opts.step_tol * 2.0 * np.pi / np.max(base)
     evaluations = mesh.shape[0]
 
@@ -210,10 +209,11 @@ def maximize_in_box(
     # point so far after a failed candidate. ``u`` and ``f`` hold the best point seen, so the search is
     # monotone whatever the candidate does.
     cand = u.copy()
-    # The live subproblems' state is kept compacted (``lu``, ``lf`` best point and value, ``lc`` candidate,
-    # ``ls`` spacing, ``lr`` problem row, ``lidx`` position in ``u``/``f``); retiring ones are written back.
+    # The live subproblems' state is kept compacted: ``lu``, ``lf`` best point and value, ``lc``
+    # candidate, ``ls`` stencil spacing in units of ``base``, ``lr`` problem row, ``lidx`` position in
+    # ``u``/``f``; retiring ones are written back.
     lidx = np.arange(u.shape[0])
-    lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), scale.copy(), rows.copy()
+    lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), np.ones(u.shape[0]), rows.copy()
     ar = np.arange(lidx.size)
     for _ in range(opts.max_iterations):
         if lidx.size == 0:
