@@ -1,6 +1,8 @@
 import json
 from pathlib import Path
 
+import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
@@ -8,6 +10,7 @@ from oceanloc.io.gnssa import lajolla_paths
 
 KEYS = {
     "file",
+    "epoch_utc",
     "n_m",
     "e_m",
     "u_m",
@@ -38,10 +41,40 @@ def test_localize_gnssa_json_shape_figures_and_spread(tmp_path: Path):
     assert set(data) == {"surveys", "spread"}
     assert [s["file"] for s in data["surveys"]] == ["gnssa_data_20211210", "gnssa_data_20220321"]
     assert all(set(s) == KEYS for s in data["surveys"])
-    assert set(data["spread"]) == {"std_n_m", "std_e_m", "std_u_m"}
+    assert {"std_n_m", "std_e_m", "std_u_m", "chi2_n", "sigmas_explain_n", "at_survey_epochs"} <= set(
+        data["spread"]
+    )
+    # the La Jolla files get the Pacific plate's velocity by default; two surveys fit no velocity
+    assert data["spread"]["site_velocity"]["source"] == "ITRF2014 PCFC"
+    assert data["spread"]["site_velocity"]["e_mm_yr"] == pytest.approx(-44.0, abs=0.1)
+    assert "fitted_velocity" not in data["spread"]
+    assert data["surveys"][1]["epoch_utc"].startswith("2022-03-21T")
     assert data["surveys"][0]["pings_used"] + data["surveys"][0]["pings_excluded"] == 64
     assert (tmp_path / "fig" / "gnssa_data_20211210_residuals.png").stat().st_size > 10_000
     assert (tmp_path / "fig" / "gnssa_spread.png").exists()
+
+
+def test_site_velocity_option(tmp_path: Path, capsys):
+    paths = [str(p) for p in lajolla_paths()[3:5]]
+    out = tmp_path / "r.json"
+    res = CliRunner().invoke(
+        app, ["localize", "gnssa", *paths, "--site-velocity", "-40,20", "--json", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    spread = json.loads(out.read_text())["spread"]
+    assert spread["site_velocity"] == {"source": "given", "e_mm_yr": -40.0, "n_mm_yr": 20.0, "u_mm_yr": 0.0}
+    # 2021-12-10 to 2022-03-21 is 0.28 yr: the north difference shrinks by 20 mm/yr x 0.28 yr = 5.6 mm
+    d_raw = spread["at_survey_epochs"]["std_n_m"] * np.sqrt(2)
+    assert d_raw - spread["std_n_m"] * np.sqrt(2) == pytest.approx(0.0056, abs=2e-4)
+    args = ["localize", "gnssa", *paths, "--site-velocity", "none", "--json", str(out)]
+    assert CliRunner().invoke(app, args).exit_code == 0
+    assert json.loads(out.read_text())["spread"]["site_velocity"] is None
+    for value, message in (("1,x", "'VE,VN[,VU]' in mm/yr"), ("EURX", "unknown plate 'EURX'")):
+        with pytest.raises(SystemExit) as exc:
+            main(["localize", "gnssa", paths[0], "--site-velocity", value])
+        assert exc.value.code == 2
+        err = " ".join(capsys.readouterr().err.split())
+        assert message in err and "Traceback" not in err
 
 
 def test_sound_speed_override_and_unknown_file_errors(tmp_path: Path, capsys):

@@ -13,8 +13,16 @@ from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa
-from oceanloc.evaluation.repeatability import survey_spread
-from oceanloc.io.gnssa import lajolla_paths, read_gnssa, survey_sound_speeds_mps
+from oceanloc.evaluation.repeatability import SurveySpread, survey_spread
+from oceanloc.geo.plate_motion import SiteVelocity, given_site_velocity, plate_site_velocity
+from oceanloc.io.gnssa import (
+    GPS_EPOCH_2020_UNIX_S,
+    PUBLISHED_SOUND_SPEED_MPS,
+    GnssaSurvey,
+    lajolla_paths,
+    read_gnssa,
+    survey_sound_speeds_mps,
+)
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges
 
@@ -67,6 +75,14 @@ def gnssa(
         bool,
         typer.Option(help="Add the survey-wide (time-correlated) GNSS error to the reported sigmas."),
     ] = True,
+    site_velocity: Annotated[
+        str,
+        typer.Option(
+            help="Secular velocity of the transponder, to compare surveys at one epoch: a plate of the "
+            "ITRF2014 plate-motion model (PCFC, NOAM), 'VE,VN[,VU]' in mm/yr, 'none', or 'auto' (PCFC for "
+            "the La Jolla surveys, known by file name; none otherwise).",
+        ),
+    ] = "auto",
     json_path: Annotated[Path | None, typer.Option("--json", help="Write the results as JSON here.")] = None,
     figures: Annotated[
         Path | None, typer.Option("--figures", help="Write residual figures (PNG) in this folder.")
@@ -102,9 +118,10 @@ def gnssa(
         for r in results:
             for e in r.exclusions:
                 console.print(f"{r.name}: {e}", highlight=False)
-    spread = survey_spread(results) if len(results) >= 2 else None
+    velocity = parse_site_velocity(site_velocity, surveys)
+    spread = survey_spread(results, velocity) if len(results) >= 2 else None
     if spread is not None:
-        _print_spread(spread)
+        _print_spread(spread, survey_spread(results) if velocity is not None else None)
     if figures is not None:
         from oceanloc.report.field_figures import gnssa_residual_figure, gnssa_spread_figure
 
@@ -112,14 +129,36 @@ def gnssa(
         for s, r in zip(surveys, results, strict=True):
             gnssa_residual_figure(s, r, figures / f"{s.name}_residuals.png")
         if len(results) >= 2:
-            gnssa_spread_figure(results, figures / "gnssa_spread.png")
+            gnssa_spread_figure(results, spread, figures / "gnssa_spread.png")
         err_console.print(f"wrote figures to {figures}")
     if json_path is not None:
-        write_json(json_path, gnssa_json(results))
+        write_json(json_path, gnssa_json(results, velocity))
 
 
-def gnssa_json(results: list[GnssaResult]) -> dict:
-    """The ``--json`` payload: one entry per survey and the spread across them."""
+def parse_site_velocity(spec: str, surveys: list[GnssaSurvey]) -> SiteVelocity | None:
+    """The ``--site-velocity`` value as a :class:`SiteVelocity` (None: compare positions as surveyed)."""
+    text = spec.strip()
+    if text.lower() == "none":
+        return None
+    if text.lower() == "auto":
+        if not surveys or any(s.name not in PUBLISHED_SOUND_SPEED_MPS for s in surveys):
+            return None
+        text = "PCFC"
+    if "," in text:
+        try:
+            values = tuple(float(v) for v in text.split(","))
+        except ValueError:
+            raise ConfigError(f"--site-velocity: {spec!r} is not 'VE,VN[,VU]' in mm/yr") from None
+        return given_site_velocity(values)
+    origin = next((s.origin for s in surveys if s.origin is not None), None)
+    if origin is None:
+        raise ConfigError(f"--site-velocity {spec}: a plate velocity needs a file header with Lat0 and Lon0")
+    return plate_site_velocity(origin.lat_deg, origin.lon_deg, text.upper())
+
+
+def gnssa_json(results: list[GnssaResult], velocity: SiteVelocity | None = None) -> dict:
+    """The ``--json`` payload: one entry per survey and the spread across them (at one epoch, moved by
+    ``velocity``; ``at_survey_epochs`` without it)."""
     surveys = []
     for r in results:
         e, n, u = r.position_enu_m
@@ -127,6 +166,7 @@ def gnssa_json(results: list[GnssaResult]) -> dict:
         surveys.append(
             {
                 "file": r.name,
+                "epoch_utc": _utc(r.epoch_s),
                 "n_m": n,
                 "e_m": e,
                 "u_m": u,
@@ -146,11 +186,50 @@ def gnssa_json(results: list[GnssaResult]) -> dict:
         )
     payload: dict = {"surveys": surveys}
     if len(results) >= 2:
-        s = survey_spread(results)
-        payload["spread"] = {"std_n_m": s.std_enu_m[1], "std_e_m": s.std_enu_m[0], "std_u_m": s.std_enu_m[2]}
+        s = survey_spread(results, velocity)
+        payload["spread"] = _spread_json(s)
+        payload["spread"]["reference_epoch_utc"] = _utc(s.reference_epoch_s)
+        payload["spread"]["site_velocity"] = (
+            None
+            if velocity is None
+            else {
+                "source": velocity.source,
+                **_enu_mm_yr(velocity.velocity_enu_mm_yr),
+            }
+        )
+        if s.fitted_velocity_enu_mps is not None and s.fitted_velocity_sigma_enu_mps is not None:
+            fit = s.fitted_velocity_enu_mps * _MM_YR
+            fit_sigma = s.fitted_velocity_sigma_enu_mps * _MM_YR
+            payload["spread"]["fitted_velocity"] = {
+                f"{axis}_mm_yr": [fit[j], fit_sigma[j]] for axis, j in (("e", 0), ("n", 1), ("u", 2))
+            }
+        payload["spread"]["at_survey_epochs"] = _spread_json(survey_spread(results))
     else:
         payload["spread"] = {"std_n_m": None, "std_e_m": None, "std_u_m": None}
     return payload
+
+
+_MM_YR = 1e3 * 365.25 * 86400.0
+
+
+def _enu_mm_yr(v: np.ndarray) -> dict:
+    return {"e_mm_yr": float(v[0]), "n_mm_yr": float(v[1]), "u_mm_yr": float(v[2])}
+
+
+def _spread_json(s: SurveySpread) -> dict:
+    out: dict = {"std_n_m": s.std_enu_m[1], "std_e_m": s.std_enu_m[0], "std_u_m": s.std_enu_m[2]}
+    for axis, j in (("n", 1), ("e", 0), ("u", 2)):
+        out[f"chi2_{axis}"] = s.chi2_enu[j]
+        out[f"sigmas_explain_{axis}"] = bool(s.sigmas_explain_spread[j])
+    out["chi2_95_range"] = s.chi2_bounds.tolist()
+    return out
+
+
+def _utc(epoch_s: float) -> str:
+    """A GNSS-A epoch (seconds after 2020-01-01 UTC) as an ISO 8601 UTC time."""
+    from datetime import UTC, datetime
+
+    return datetime.fromtimestamp(GPS_EPOCH_2020_UNIX_S + epoch_s, tz=UTC).isoformat(timespec="seconds")
 
 
 def _print_results(results: list[GnssaResult]) -> None:
@@ -195,8 +274,15 @@ def _print_results(results: list[GnssaResult]) -> None:
         console.print(geo_table)
 
 
-def _print_spread(spread) -> None:
-    table = Table(title=f"Spread across {spread.n_surveys} surveys")
+def _print_spread(spread: SurveySpread, as_surveyed: SurveySpread | None) -> None:
+    title = f"Spread across {spread.n_surveys} surveys"
+    if spread.velocity is not None:
+        v = spread.velocity.velocity_enu_mm_yr
+        title += (
+            f", moved to {_utc(spread.reference_epoch_s)[:10]} by the site velocity"
+            f" ({spread.velocity.source}: E {v[0]:+.1f}, N {v[1]:+.1f} mm/yr)"
+        )
+    table = Table(title=title)
     for col in ("axis", "std cm", "RMS σ cm", "chi2", "95% range", "σ explain", "target", "met"):
         table.add_column(col, justify="right")
     lo, hi = spread.chi2_bounds
@@ -214,6 +300,22 @@ def _print_spread(spread) -> None:
             "yes" if spread.std_enu_m[j] <= tgt else "no",
         )
     console.print(table)
+    if as_surveyed is not None:
+        c = as_surveyed.chi2_enu
+        console.print(
+            f"as surveyed (no site velocity): std N/E/U {100 * as_surveyed.std_enu_m[1]:.1f}/"
+            f"{100 * as_surveyed.std_enu_m[0]:.1f}/{100 * as_surveyed.std_enu_m[2]:.1f} cm, "
+            f"chi2 {c[1]:.1f}/{c[0]:.1f}/{c[2]:.1f}",
+            highlight=False,
+        )
+    if spread.fitted_velocity_enu_mps is not None and spread.fitted_velocity_sigma_enu_mps is not None:
+        fit = spread.fitted_velocity_enu_mps * _MM_YR
+        sig = spread.fitted_velocity_sigma_enu_mps * _MM_YR
+        console.print(
+            f"velocity the surveys imply (weighted fit): E {fit[0]:+.0f} ± {sig[0]:.0f}, "
+            f"N {fit[1]:+.0f} ± {sig[1]:.0f}, U {fit[2]:+.0f} ± {sig[2]:.0f} mm/yr",
+            highlight=False,
+        )
 
 
 @app.command("logs")

@@ -179,6 +179,9 @@ class GnssaResult:
         Delete-one-block jackknife covariance.
     position_geodetic : (3,) float or None
         Latitude (deg), longitude (deg), ellipsoidal height (m) if the file has an origin.
+    epoch_s : float
+        Epoch of the position: the mean transmit time of the used pings, in the file's time base
+        (seconds after 2020-01-01 UTC for the La Jolla format).
     knot_times_s : (K,) float
         Times of the sound-speed knots (empty if the sound speed is fixed).
     sound_speed_knots_mps : (K,) float
@@ -215,6 +218,7 @@ class GnssaResult:
     covariance_formal_m2: FloatArray
     covariance_jackknife_m2: FloatArray | None
     position_geodetic: FloatArray | None
+    epoch_s: float
     knot_times_s: FloatArray
     sound_speed_knots_mps: FloatArray
     sound_speed_mps: float
@@ -496,6 +500,7 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         covariance_formal_m2=cov_formal,
         covariance_jackknife_m2=cov_jk,
         position_geodetic=geodetic,
+        epoch_s=float(np.mean(survey.t_transmit_s[used])),
         knot_times_s=knots,
         sound_speed_knots_mps=x[0, k0:].copy(),
         gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),

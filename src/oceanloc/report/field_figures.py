@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from oceanloc.estimation.gnssa import GnssaResult
 from oceanloc.estimation.noise import StationaryNoise
+from oceanloc.evaluation.repeatability import SurveySpread
 from oceanloc.io.gnssa import GnssaSurvey
 from oceanloc.report._figures import save_figure
 
@@ -68,10 +69,10 @@ def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) 
     return path
 
 
-def gnssa_spread_figure(results: list[GnssaResult], path: Path) -> Path:
-    """Per-survey positions with 1-sigma bars, relative to the mean, for E, N and U."""
-    pos = np.array([r.position_enu_m for r in results])
-    sig = np.array([r.sigma_enu_m for r in results])
+def gnssa_spread_figure(results: list[GnssaResult], spread: SurveySpread, path: Path) -> Path:
+    """Per-survey positions at the spread's reference epoch with 1-sigma bars, relative to the mean, for
+    E, N and U."""
+    pos, sig = spread.positions_enu_m, spread.sigma_enu_m
     dev_cm = 100.0 * (pos - pos.mean(axis=0))
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.8), sharey=True)
     idx = np.arange(len(results))
@@ -80,6 +81,8 @@ def gnssa_spread_figure(results: list[GnssaResult], path: Path) -> Path:
         ax.axvline(0.0, color="0.5", lw=0.8)
         ax.set(xlabel=f"{name} - mean [cm]", title=f"std {np.std(dev_cm[:, k], ddof=1):.1f} cm")
     axes[0].set_yticks(idx, [r.name.removeprefix("gnssa_data_") for r in results])
+    moved = "as surveyed" if spread.velocity is None else f"moved to one epoch ({spread.velocity.source})"
+    fig.suptitle(f"GNSS-A positions across surveys, {moved}", fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
