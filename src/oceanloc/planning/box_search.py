@@ -180,11 +180,14 @@ def maximize_in_box(
         return np.where(per, lo + np.mod(u - lo, hi - lo), mid + half * np.sin(u))
 
     def fn_u(u: FloatArray, rows: IntArray) -> FloatArray:
+        if batch == 1 and u.shape[0] > 1:
+            # one problem: its subproblems' candidates are one candidate set of that problem
+            return fn(to_x(u.reshape(1, -1, d)), rows[:1]).reshape(u.shape[:2])
         return fn(to_x(u), rows)
 
     n = opts.grid_points
-    axes = grid_axes(u_lo, u_hi, n, per)
-    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, d)
+    axes, mesh, base = _u_grid(n, tuple(u_lo.tolist()), tuple(u_hi.tolist()), tuple(per.tolist()))
+    scale_min = opts.step_tol * 2.0 * np.pi / float(base.max())
     all_rows = np.arange(batch)
     tensor_grid = getattr(fn, "tensor_grid", None)
     values = None
@@ -198,71 +201,65 @@ def maximize_in_box(
     rows = np.repeat(all_rows, s_count)
     u = mesh[starts.reshape(-1)]
     f = np.take_along_axis(values, starts, axis=1).reshape(-1)
-    base = np.array([ax[1] - ax[0] for ax in axes]) / 2.0
-    scale_min = opts.step_tol * 2.0 * np.pi / np.max(base)
     evaluations = mesh.shape[0]
 
-    stencil, center, plus, minus, pair_i, pair_j, corners = _stencil(d)
-    diag = np.arange(d)
+    stencil, center, weights = _stencil(d)
     # The stencil of each iteration is centred on a candidate: the Newton point of the previous model,
     # evaluated lazily as the centre of the next stencil (one objective call per iteration), or the best
     # point so far after a failed candidate. ``u`` and ``f`` hold the best point seen, so the search is
-    # monotone whatever the candidate does.
-    cand = u.copy()
+    # monotone whatever the candidate does. The local model is built in stencil units
+    # ``z = (u - centre) / (s base)``: one matrix product gives its gradient and Hessian, and the trust
+    # region is four spacings per axis.
     # The live subproblems' state is kept compacted: ``lu``, ``lf`` best point and value, ``lc``
     # candidate, ``ls`` stencil spacing in units of ``base``, ``lr`` problem row, ``lidx`` position in
     # ``u``/``f``; retiring ones are written back.
     lidx = np.arange(u.shape[0])
     lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), np.ones(u.shape[0]), rows.copy()
     ar = np.arange(lidx.size)
+    flat_tol = opts.value_tol
     for _ in range(opts.max_iterations):
-        if lidx.size == 0:
+        n = lidx.size
+        if n == 0:
             break
         hl = ls[:, None] * base
         pts = lc[:, None, :] + stencil * hl[:, None, :]
         fs = fn_u(pts, lr)
-        evaluations += len(stencil) * lidx.size / batch
-        f0 = fs[:, center]
-        f_plus, f_minus = fs[:, plus], fs[:, minus]
-        grad = (f_plus - f_minus) / (2.0 * hl)
-        hess = np.empty((lidx.size, d, d))
-        hess[:, diag, diag] = (f_plus - 2.0 * f0[:, None] + f_minus) / hl**2
-        if pair_i.size:
-            mixed = (fs[:, corners[0]] - fs[:, corners[1]] - fs[:, corners[2]] + fs[:, corners[3]]) / (
-                4.0 * hl[:, pair_i] * hl[:, pair_j]
-            )
-            hess[:, pair_i, pair_j] = mixed
-            hess[:, pair_j, pair_i] = mixed
-        lam, vec = np.linalg.eigh(hess)
-        curvature = np.maximum(np.abs(lam), 1e-9 * np.max(np.abs(lam), axis=-1, keepdims=True) + 1e-300)
-        g_eig = (grad[:, None, :] @ vec)[:, 0]  # V^T g
-        step = (vec @ (g_eig / curvature)[:, :, None])[:, :, 0]
-        predicted_gain = 0.5 * np.sum(g_eig * g_eig / curvature, axis=-1)
-        ratio = np.max(np.abs(step) / (4.0 * hl), axis=-1)
-        clip = np.maximum(ratio, 1.0)
-        step /= clip[:, None]  # trust region: four stencil spacings
-        s_eig = g_eig / curvature / clip[:, None]  # V^T step
-
-        n = lidx.size
+        evaluations += len(stencil) * n / batch
+        gh = fs @ weights
+        lam, vec = np.linalg.eigh(gh[:, d:].reshape(n, d, d))
+        a_lam = np.abs(lam)
+        # eigenvalues come sorted: the largest magnitude is at one end
+        floor = 1e-9 * np.maximum(a_lam[:, :1], a_lam[:, -1:]) + 1e-300
+        curvature = np.maximum(a_lam, floor)
+        g_eig = (gh[:, None, :d] @ vec)[:, 0]  # V^T g
+        s_eig = g_eig / curvature  # V^T step, before the trust region
+        predicted_gain = 0.5 * np.add.reduce(g_eig * s_eig, axis=1)
+        step = (vec @ s_eig[:, :, None])[:, :, 0]
+        a_step = np.maximum.reduce(np.abs(step), axis=1)
+        clip = np.maximum(0.25 * a_step, 1.0)
+        inv_clip = 1.0 / clip
+        # the model's value at the clipped step: f0 + (2/c - 1/c^2) predicted_gain
         ar_n = ar[:n]
-        j_best = np.argmax(fs, axis=-1)
+        j_best = fs.argmax(axis=1)
         f_sten = fs[ar_n, j_best]
-        f_before = lf
-        improved = f_sten > f_before
-        lu = np.where(improved[:, None], pts[ar_n, j_best], lu)
-        lf = np.where(improved, f_sten, f_before)
-        s_now = ls
-        step_scale = np.clip(2.0 * np.max(np.abs(step) / base, axis=-1), scale_min, 1.0)
-        at_max = np.all(lam < 0.0, axis=-1)
+        f0 = fs[:, center]
+        f_model = f0 + predicted_gain * inv_clip * (2.0 - inv_clip)
+        improved = f_sten > lf
         # Centred on the best point so far, or a better stencil point that the model's Newton point
         # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
         # point: move there at the same spacing. Neither: back to the best point, four times finer.
-        centre_best = (j_best == center) & (f0 >= f_before)
-        f_model = f0 + np.sum(g_eig * s_eig - 0.5 * curvature * s_eig * s_eig, axis=-1)
+        centre_best = (j_best == center) & (f0 >= lf)
         newton = centre_best | (improved & (f_model > f_sten))
-        moved = improved & ~newton
-        lc = np.where(newton[:, None], lc + step, lu)
-        ls = np.where(newton, step_scale, np.where(moved, s_now, s_now / 4.0))
+        lu = np.where(improved[:, None], pts[ar_n, j_best], lu)
+        lf = np.where(improved, f_sten, lf)
+        s_now = ls
+        at_max = lam[:, -1] < 0.0
+        # The next spacing follows the step, but shrinks at most 16-fold: a vanishing step on a coarse
+        # stencil (on a bound x = c + r sin(u) is stationary in u whatever the objective does nearby)
+        # is checked on finer stencils before the search stops there.
+        step_scale = np.minimum(np.maximum(2.0 * a_step * inv_clip, _MAX_SHRINK), 1.0) * s_now
+        lc = np.where(newton[:, None], lc + step * (inv_clip[:, None] * hl), lu)
+        ls = np.where(newton, step_scale, np.where(improved, s_now, 0.25 * s_now))
         # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
         # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
         # a flat direction would let the point itself keep moving.
@@ -270,28 +267,47 @@ def maximize_in_box(
             centre_best
             & at_max
             & (s_now < 1e-2)
-            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
+            & (predicted_gain <= flat_tol * np.maximum(1.0, np.abs(lf)))
         )
         keep = (ls > scale_min) & ~flat
         if not keep.all():
             done = ~keep
-            u[lidx[done]], f[lidx[done]], cand[lidx[done]] = lu[done], lf[done], lc[done]
+            u[lidx[done]], f[lidx[done]] = lu[done], lf[done]
             lidx, lu, lf, lc, ls, lr = lidx[keep], lu[keep], lf[keep], lc[keep], ls[keep], lr[keep]
-    u[lidx], f[lidx], cand[lidx] = lu, lf, lc
-
-    # The last Newton candidates were never centred: evaluate them all in one call.
-    pending = np.flatnonzero(np.any(cand != u, axis=-1))
-    if pending.size:
-        f_cand = fn_u(cand[pending, None, :], rows[pending])[:, 0]
+    u[lidx], f[lidx] = lu, lf
+    # Subproblems that retired converged (in value, or in spacing), so their last Newton candidate
+    # promises nothing worth a call; those still live after max_iterations get theirs evaluated.
+    moved = np.any(lc != lu, axis=-1)
+    if moved.any():
+        pending, lc = lidx[moved], lc[moved]
+        f_cand = fn_u(lc[:, None, :], rows[pending])[:, 0]
         evaluations += pending.size / batch
         better = f_cand > f[pending]
-        u[pending[better]] = cand[pending[better]]
+        u[pending[better]] = lc[better]
         f[pending[better]] = f_cand[better]
 
     f = f.reshape(batch, s_count)
     best = np.argmax(f, axis=1)
     u_best = u.reshape(batch, s_count, d)[all_rows, best]
     return BoxMaximum(x=to_x(u_best), value=f[all_rows, best], evaluations=round(evaluations))
+
+
+_MAX_SHRINK = 1.0 / 16.0
+"""Smallest ratio of one stencil spacing to the previous one after a Newton step."""
+
+
+@functools.lru_cache(maxsize=32)
+def _u_grid(
+    points: int, u_lo: tuple[float, ...], u_hi: tuple[float, ...], periodic: tuple[bool, ...]
+) -> tuple[list[FloatArray], FloatArray, FloatArray]:
+    """The grid stage's axes, its ``(points^d, d)`` mesh and the first stencil spacing ``base (d,)`` (half
+    the grid step), in the search variable ``u`` (cached: every planning call of a planner uses the same)."""
+    axes = grid_axes(np.array(u_lo), np.array(u_hi), points, np.array(periodic))
+    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
+    base = np.array([ax[1] - ax[0] for ax in axes]) / 2.0
+    for arr in (*axes, mesh, base):
+        arr.flags.writeable = False
+    return axes, mesh, base
 
 
 def _box(
@@ -306,23 +322,25 @@ def _box(
 
 
 @functools.lru_cache(maxsize=8)
-def _stencil(d: int) -> tuple[FloatArray, int, IntArray, IntArray, IntArray, IntArray, IntArray]:
-    """The ``3^d`` stencil and the indices of its centre, axis neighbours and corner pairs (cached: the
-    same few dimensions recur on every planning call)."""
+def _stencil(d: int) -> tuple[FloatArray, int, FloatArray]:
+    """The ``3^d`` stencil, the index of its centre, and the central-difference weights ``(3^d, d + d^2)``
+    that turn the stencil's values into the gradient and the (row-major) Hessian in stencil units
+    (cached: the same few dimensions recur on every planning call)."""
     stencil = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=d)))
     center = (len(stencil) - 1) // 2
-    plus = np.array([_stencil_index(stencil, {i: 1}) for i in range(d)])
-    minus = np.array([_stencil_index(stencil, {i: -1}) for i in range(d)])
-    pair_i, pair_j = np.triu_indices(d, 1)
-    corners = np.array(
-        [
-            [_stencil_index(stencil, {int(i): a, int(j): b}) for i, j in zip(pair_i, pair_j, strict=True)]
-            for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))
-        ]
-    ).reshape(4, -1)
-    for arr in (stencil, plus, minus, pair_i, pair_j, corners):
+    weights = np.zeros((len(stencil), d + d * d))
+    for i in range(d):
+        plus, minus = _stencil_index(stencil, {i: 1}), _stencil_index(stencil, {i: -1})
+        weights[plus, i], weights[minus, i] = 0.5, -0.5
+        hii = d + i * d + i
+        weights[plus, hii], weights[minus, hii], weights[center, hii] = 1.0, 1.0, -2.0
+        for j in range(i + 1, d):
+            for a, b, w in ((1, 1, 0.25), (1, -1, -0.25), (-1, 1, -0.25), (-1, -1, 0.25)):
+                idx = _stencil_index(stencil, {i: a, j: b})
+                weights[idx, d + i * d + j] = weights[idx, d + j * d + i] = w
+    for arr in (stencil, weights):
         arr.flags.writeable = False
-    return stencil, center, plus, minus, pair_i, pair_j, corners
+    return stencil, center, weights
 
 
 def _stencil_index(stencil: FloatArray, offsets: dict[int, int]) -> int:
@@ -335,21 +353,24 @@ def _stencil_index(stencil: FloatArray, offsets: dict[int, int]) -> int:
 def _grid_local_maxima(values: FloatArray, periodic: BoolArray, count: int) -> FloatArray:
     """Flat indices ``(B, count)`` of the best grid local maxima (best point repeated if fewer)."""
     batch = values.shape[0]
+    d = values.ndim - 1
+    # pad every non-periodic axis with -inf (wrap the periodic ones), then compare with both neighbours
+    padded = values
+    for axis in range(1, d + 1):
+        if periodic[axis - 1]:
+            padded = np.concatenate([padded.take([-1], axis), padded, padded.take([0], axis)], axis=axis)
+        else:
+            shape = list(padded.shape)
+            shape[axis] = 1
+            edge = np.full(shape, -np.inf)
+            padded = np.concatenate([edge, padded, edge], axis=axis)
+    inner = tuple([slice(None)] + [slice(1, -1)] * d)
     is_max = np.ones(values.shape, dtype=bool)
-    for axis in range(1, values.ndim):
-        for shift in (1, -1):
-            if periodic[axis - 1]:
-                neighbour = np.roll(values, shift, axis=axis)
-            else:
-                neighbour = np.full_like(values, -np.inf)
-                src = [slice(None)] * values.ndim
-                dst = [slice(None)] * values.ndim
-                if shift == 1:
-                    src[axis], dst[axis] = slice(None, -1), slice(1, None)
-                else:
-                    src[axis], dst[axis] = slice(1, None), slice(None, -1)
-                neighbour[tuple(dst)] = values[tuple(src)]
-            is_max &= values >= neighbour
+    for axis in range(1, d + 1):
+        for lo, hi in ((0, -2), (2, None)):
+            nb = list(inner)
+            nb[axis] = slice(lo, hi)
+            is_max &= values >= padded[tuple(nb)]
     flat = values.reshape(batch, -1)
     score = np.where(is_max.reshape(batch, -1), flat, -np.inf)
     order = np.argsort(-score, axis=1, kind="stable")[:, :count]

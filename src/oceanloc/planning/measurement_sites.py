@@ -30,13 +30,7 @@ from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import ConfigError
 from oceanloc.models.vehicles import unicycle_rollout
 from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
-from oceanloc.planning.information import (
-    information_gain,
-    log_det_identity_plus_gram,
-    scaled_cholesky,
-    whitened_gain,
-    whitened_line_of_sight,
-)
+from oceanloc.planning.information import information_gain, log_det_identity_plus_gram, scaled_cholesky
 from oceanloc.planning.status import PlanStatus
 
 
@@ -165,40 +159,68 @@ class _YawRateObjective:
     """The look-ahead objective with each problem's constants unpacked once (the planner's hot path).
 
     ``objective(rates (b, C, k), rows (b,)) -> (b, C)``: the unicycle rollout (eq. 1) in closed form and the
-    gain of :func:`oceanloc.planning.information.whitened_gain`, component by component.
+    gain ``log det(I_k + U U^T)`` of :mod:`oceanloc.planning.information`, component by component. The
+    arrays are laid out ``(step, problem, transponder, candidate)`` so that every operand is contiguous
+    (the sizes are small: the cost is per array operation, and strided views double it), and the parts
+    of the whitened line of sight ``L^T (p_hat - site) / r`` that do not depend on the site (``dz`` times
+    the Cholesky factor's last row) are computed once here.
     """
 
     def __init__(self, state: PlanningState, planner: LookaheadPlanner) -> None:
         pos, est = state.pos_enu_m, state.estimates_m
         chol = scaled_cholesky(state.covariances_m2, planner.sigma_range_m)
         dz = est[..., 2] - pos[:, 2:3]
-        # one (B, 12, M) table of per-problem and per-transponder constants: one gather per call
+        x0 = np.broadcast_to(pos[:, 0:1], dz.shape)
+        y0 = np.broadcast_to(pos[:, 1:2], dz.shape)
+        # (13, B, M, 1): one gather per call; the trailing axis broadcasts over candidates
         self.table = np.stack(
             [
-                np.broadcast_to(pos[:, 0:1], dz.shape),
-                np.broadcast_to(pos[:, 1:2], dz.shape),
+                x0,
+                y0,
                 np.broadcast_to(state.yaw_rad[:, None], dz.shape),
-                est[..., 0],
-                est[..., 1],
+                est[..., 0] - x0,
+                est[..., 1] - y0,
+                chol[..., 0, 0],
+                chol[..., 1, 0],
+                chol[..., 1, 1],
+                dz * chol[..., 2, 0],
+                dz * chol[..., 2, 1],
+                dz * chol[..., 2, 2],
+                dz * dz,
                 dz,
-                *(chol[..., i, j] for i, j in ((0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2))),
-            ],
-            axis=1,
-        )
+            ]
+        )[..., None]
         self.step_m = planner.speed_mps * planner.period_s
         self.period_s = planner.period_s
         self.batch = pos.shape[0]
 
+    def _constants(self, rows: IntArray) -> FloatArray:
+        return self.table if rows.size == self.batch == 1 else self.table[:, rows]
+
+    def _whitened_rows(
+        self, dx: FloatArray, dy: FloatArray, t: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``L^T (p_hat - site) / r`` from the horizontal components ``dx, dy`` (broadcast against the
+        constants ``t``): :func:`~oceanloc.planning.information.whitened_line_of_sight` with the
+        site-independent products precomputed."""
+        inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + t[11])
+        return (dx * t[5] + dy * t[6] + t[8]) * inv_r, (dy * t[7] + t[9]) * inv_r, t[10] * inv_r
+
     def __call__(self, rates: FloatArray, rows: IntArray) -> FloatArray:
-        table = self.table if rows.size == self.batch == 1 else self.table[rows]
-        c = table[:, :, None, None, :]  # (b, 12, 1, 1, M)
-        x0, y0, yaw0 = c[:, 0, ..., 0], c[:, 1, ..., 0], c[:, 2, ..., 0]
-        yaw = yaw0 + np.cumsum(rates, axis=-1) * self.period_s
-        px = x0 + np.cumsum(np.cos(yaw), axis=-1) * self.step_m
-        py = y0 + np.cumsum(np.sin(yaw), axis=-1) * self.step_m
-        dx = c[:, 3] - px[..., None]
-        dy = c[:, 4] - py[..., None]
-        return whitened_gain(dx, dy, c[:, 5], [c[:, 6 + i] for i in range(6)]).sum(axis=-1)
+        t = self._constants(rows)
+        k = rates.shape[-1]
+        steps = rates.transpose(2, 0, 1)  # (k, b, C)
+        yaw = t[2, :, 0] + np.cumsum(steps, axis=0) * self.period_s
+        px = (np.cumsum(np.cos(yaw), axis=0) * self.step_m)[:, :, None, :]  # (k, b, 1, C), from x0
+        py = (np.cumsum(np.sin(yaw), axis=0) * self.step_m)[:, :, None, :]
+        u0, u1, u2 = self._whitened_rows(t[3] - px, t[4] - py, t)  # (k, b, M, C)
+        if k > 3:
+            U = np.stack(np.broadcast_arrays(u0, u1, u2), axis=-1)  # (k, b, M, C, 3)
+            U = np.moveaxis(U, 0, -2)  # (b, M, C, k, 3)
+            gain = np.linalg.slogdet(np.eye(k) + U @ np.swapaxes(U, -1, -2))[1]
+        else:
+            gain = log_det_identity_plus_gram([(u0[i], u1[i], u2[i]) for i in range(k)])
+        return gain.sum(axis=1)
 
     def tensor_grid(self, axes: list[FloatArray], rows: IntArray) -> FloatArray | None:
         """The objective on the tensor grid ``axes[0] x ... x axes[k-1]`` of yaw rates, ``(b, prod n_j)``
@@ -211,31 +233,20 @@ class _YawRateObjective:
         k = len(axes)
         if k > 3:
             return None
-        table = self.table[rows]
-        m = table.shape[-1]
-        lead = (table.shape[0],) + (1,) * k  # (b, 1, ..., 1) before the transponder axis
-
-        def per_problem(i: int) -> FloatArray:  # (b, 1, ..., 1)
-            return table[:, i, 0].reshape(lead)
-
-        def per_transponder(i: int) -> FloatArray:  # (b, 1, ..., 1, M)
-            return table[:, i].reshape(*lead, m)
-
-        yaw, px, py = per_problem(2), per_problem(0), per_problem(1)
-        dz = per_transponder(5)
-        lower = [per_transponder(6 + i) for i in range(6)]
+        c = self._constants(rows)
+        t = c.reshape(*c.shape[:3], *([1] * k))  # (13, b, M, 1, ..., 1)
+        yaw = t[2, :, :1]
+        px = py = 0.0
         rows_u = []
         for j, ax in enumerate(axes):
-            shape = [1] * (k + 1)
-            shape[j + 1] = ax.size
+            shape = [1] * (k + 2)
+            shape[j + 2] = ax.size
             yaw = yaw + ax.reshape(shape) * self.period_s
             px = px + np.cos(yaw) * self.step_m
             py = py + np.sin(yaw) * self.step_m
-            dx = per_transponder(3) - px[..., None]
-            dy = per_transponder(4) - py[..., None]
-            rows_u.append(whitened_line_of_sight(dx, dy, dz, lower))
-        gain = log_det_identity_plus_gram(rows_u)
-        return gain.sum(axis=-1).reshape(table.shape[0], -1)
+            rows_u.append(self._whitened_rows(t[3] - px, t[4] - py, t))
+        gain = log_det_identity_plus_gram(rows_u)  # (b, M, n_0, ..., n_{k-1})
+        return gain.sum(axis=1).reshape(gain.shape[0], -1)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
