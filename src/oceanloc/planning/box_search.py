@@ -264,10 +264,7 @@ def maximize_in_box(
         # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
         # a flat direction would let the point itself keep moving.
         flat = (
-            centre_best
-            & at_max
-            & (s_now < 1e-2)
-            & (predicted_gain <= flat_tol * np.maximum(1.0, np.abs(lf)))
+            centre_best & at_max & (s_now < 1e-2) & (predicted_gain <= flat_tol * np.maximum(1.0, np.abs(lf)))
         )
         keep = (ls > scale_min) & ~flat
         if not keep.all():
