@@ -36,6 +36,15 @@ def test_optimum_on_a_bound_and_on_a_corner():
 X_TOL_UNIT_CURVATURE = np.sqrt(2e-10)
 
 
+def test_a_bound_the_objective_rises_away_from_is_not_returned():
+    # The maximum is 1e-3 inside the lower bound: the bound is the best grid point, and a stencil of half
+    # a grid step sees it as a maximum with zero gradient (x = c + r sin(u) is stationary there); finer
+    # stencils find the way in. Returning the bound would cost 1e-6.
+    best = maximize_in_box(lambda x, r: -((x[..., 0] + 0.999) ** 2), [-1.0], [1.0], 1)
+    assert best.value[0] >= -1e-10
+    assert best.x[0, 0] == pytest.approx(-0.999, abs=X_TOL_UNIT_CURVATURE)
+
+
 def test_periodic_dimension_wraps():
     best = maximize_in_box(lambda x, r: np.cos(x[..., 0] - 3.1), [-np.pi], [np.pi], 1, periodic=[True])
     assert best.x[0, 0] == pytest.approx(3.1, abs=X_TOL_UNIT_CURVATURE)

@@ -9,14 +9,18 @@ vectorized call:
 1. **Grid.** Evaluate a regular grid over the box and keep the best ``starts`` grid local maxima
    (points not below any axis neighbour), so distinct basins are refined, not one basin ``starts`` times.
 2. **Polish.** From each start, finite-difference Newton steps on a ``3^d`` stencil whose spacing shrinks
-   with the step: central differences give the gradient and Hessian, and the Hessian's eigenvalues are
-   replaced by ``-|lambda|`` (an ascent direction even at saddles). The Newton point is not evaluated on
-   its own: it is the centre of the next iteration's stencil, so each iteration costs one objective
-   call (single planning problems are bound by call overhead, not arithmetic). A candidate that does
-   not improve on the best point seen sends the search back there at a finer spacing, so the search is
-   monotone; Newton converges quadratically inside a basin. A subproblem stops when the spacing reaches
-   ``step_tol`` or, on a fine stencil centred on its best point, when the local model promises less
-   than ``value_tol`` (relative) more.
+   with the step (at most 16-fold per step): central differences, one matrix product, give the
+   gradient and Hessian, and the Hessian's eigenvalues are replaced by ``-|lambda|`` (an ascent
+   direction even at saddles). The Newton point is not evaluated on its own: it is the centre of the
+   next iteration's stencil, so each iteration costs one objective call (single planning problems are
+   bound by call overhead, not arithmetic). A candidate that does not improve on the best point seen
+   sends the search back there at a finer spacing, so the search is monotone; Newton converges
+   quadratically inside a basin. A subproblem stops when the spacing reaches ``step_tol`` or, on a fine
+   stencil centred on its best point, when the local model promises less than ``value_tol`` (relative)
+   more; its last candidate is then not evaluated (it promises less than that). The cap on the shrink
+   matters on bounds: there ``u`` is stationary whatever the objective does, and a zero step on a
+   coarse stencil must be confirmed on finer ones, or a bound the objective rises away from within one
+   stencil spacing would be returned.
 
 Bounds are removed by the change of variables ``x = c + r sin(u)``, so every point the search visits is
 feasible and optima on a bound need no active-set logic (which stalls in the flat valleys these
