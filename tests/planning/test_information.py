@@ -56,3 +56,26 @@ def test_closed_form_log_det_matches_slogdet_and_refuses_four_rows():
         )
     with pytest.raises(ConfigError, match="1 to 3 rows"):
         log_det_identity_plus_gram([tuple(u[0])] * 4)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4])
+def test_look_ahead_objective_equals_eq29_at_the_rolled_out_sites(k):
+    from oceanloc.models.vehicles import unicycle_rollout
+    from oceanloc.planning.measurement_sites import LookaheadPlanner
+
+    rng = np.random.default_rng(40 + k)
+    st = random_planning_states(rng, 4, 4)
+    planner = LookaheadPlanner(
+        horizon=k, max_yaw_rate_rad_s=0.5, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
+    )
+    rates = rng.uniform(-0.5, 0.5, (4, 6, k))
+    gain = planner.gain(st, rates)
+    for b in range(4):
+        for c in range(6):
+            poses = unicycle_rollout(
+                st.pos_enu_m[b : b + 1], st.yaw_rad[b : b + 1], rates[b, c][None], 3.0, 1.0
+            )
+            ref = information_gain_reference(
+                poses.pos_enu_m[0], st.estimates_m[b], st.covariances_m2[b], 0.12
+            )
+            assert gain[b, c] == pytest.approx(ref, rel=1e-9, abs=1e-9)
