@@ -9,7 +9,7 @@ vectorized call:
 1. **Grid.** Evaluate a regular grid over the box and keep the best ``starts`` grid local maxima
    (points not below any axis neighbour), so distinct basins are refined, not one basin ``starts`` times.
 2. **Polish.** From each start, finite-difference Newton steps on a ``3^d`` stencil whose spacing shrinks
-   with the step (at most 16-fold per step): central differences, one matrix product, give the
+   with the step (at most 128-fold per step): central differences, one matrix product, give the
    gradient and Hessian, and the Hessian's eigenvalues are replaced by ``-|lambda|`` (an ascent
    direction even at saddles). The Newton point is not evaluated on its own: it is the centre of the
    next iteration's stencil, so each iteration costs one objective call (single planning problems are
@@ -19,7 +19,7 @@ vectorized call:
    stencil centred on its best point, when the local model promises less than ``value_tol`` (relative)
    more; its last candidate is then not evaluated (it promises less than that). The cap on the shrink
    matters on bounds: there ``u`` is stationary whatever the objective does, and a zero step on a
-   coarse stencil must be confirmed on finer ones, or a bound the objective rises away from within one
+   coarse stencil must be confirmed on a fine one, or a bound the objective rises away from within one
    stencil spacing would be returned.
 
 Bounds are removed by the change of variables ``x = c + r sin(u)``, so every point the search visits is
@@ -258,9 +258,10 @@ def maximize_in_box(
         lf = np.where(improved, f_sten, lf)
         s_now = ls
         at_max = lam[:, -1] < 0.0
-        # The next spacing follows the step, but shrinks at most 16-fold: a vanishing step on a coarse
+        # The next spacing follows the step, but shrinks at most 128-fold: a vanishing step on a coarse
         # stencil (on a bound x = c + r sin(u) is stationary in u whatever the objective does nearby)
-        # is checked on finer stencils before the search stops there.
+        # is checked on a stencil fine enough to stop on (below 1e-2), which sees the way up to any
+        # maximum lying farther inside than its spacing.
         step_scale = np.minimum(np.maximum(2.0 * a_step * inv_clip, _MAX_SHRINK), 1.0) * s_now
         lc = np.where(newton[:, None], lc + step * (inv_clip[:, None] * hl), lu)
         ls = np.where(newton, step_scale, np.where(improved, s_now, 0.25 * s_now))
@@ -293,7 +294,7 @@ def maximize_in_box(
     return BoxMaximum(x=to_x(u_best), value=f[all_rows, best], evaluations=round(evaluations))
 
 
-_MAX_SHRINK = 1.0 / 16.0
+_MAX_SHRINK = 1.0 / 128.0
 """Smallest ratio of one stencil spacing to the previous one after a Newton step."""
 
 
