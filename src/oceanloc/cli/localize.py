@@ -14,7 +14,7 @@ from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa
 from oceanloc.evaluation.repeatability import SurveySpread, survey_spread
-from oceanloc.geo.plate_motion import SiteVelocity, given_site_velocity, plate_site_velocity
+from oceanloc.geo.plate_motion import SECONDS_PER_YEAR, SiteVelocity, given_site_velocity, plate_site_velocity
 from oceanloc.io.gnssa import (
     GPS_EPOCH_2020_UNIX_S,
     PUBLISHED_SOUND_SPEED_MPS,
@@ -119,20 +119,21 @@ def gnssa(
             for e in r.exclusions:
                 console.print(f"{r.name}: {e}", highlight=False)
     velocity = parse_site_velocity(site_velocity, surveys)
-    spread = survey_spread(results, velocity) if len(results) >= 2 else None
-    if spread is not None:
-        _print_spread(spread, survey_spread(results) if velocity is not None else None)
+    spread = as_surveyed = None
+    if len(results) >= 2:
+        spread, as_surveyed = survey_spread(results, velocity), survey_spread(results)
+        _print_spread(spread, as_surveyed if velocity is not None else None)
     if figures is not None:
         from oceanloc.report.field_figures import gnssa_residual_figure, gnssa_spread_figure
 
         ensure_dir(figures)
         for s, r in zip(surveys, results, strict=True):
             gnssa_residual_figure(s, r, figures / f"{s.name}_residuals.png")
-        if len(results) >= 2:
+        if spread is not None:
             gnssa_spread_figure(results, spread, figures / "gnssa_spread.png")
         err_console.print(f"wrote figures to {figures}")
     if json_path is not None:
-        write_json(json_path, gnssa_json(results, velocity))
+        write_json(json_path, gnssa_json(results, spread, as_surveyed))
 
 
 def parse_site_velocity(spec: str, surveys: list[GnssaSurvey]) -> SiteVelocity | None:
@@ -156,9 +157,11 @@ def parse_site_velocity(spec: str, surveys: list[GnssaSurvey]) -> SiteVelocity |
     return plate_site_velocity(origin.lat_deg, origin.lon_deg, text.upper())
 
 
-def gnssa_json(results: list[GnssaResult], velocity: SiteVelocity | None = None) -> dict:
-    """The ``--json`` payload: one entry per survey and the spread across them (at one epoch, moved by
-    ``velocity``; ``at_survey_epochs`` without it)."""
+def gnssa_json(
+    results: list[GnssaResult], spread: SurveySpread | None, as_surveyed: SurveySpread | None
+) -> dict:
+    """The ``--json`` payload: one entry per survey and the spread across them (``spread``: at one
+    epoch, moved by its site velocity; ``as_surveyed`` under ``at_survey_epochs``; None for one survey)."""
     surveys = []
     for r in results:
         e, n, u = r.position_enu_m
@@ -185,31 +188,28 @@ def gnssa_json(results: list[GnssaResult], velocity: SiteVelocity | None = None)
             }
         )
     payload: dict = {"surveys": surveys}
-    if len(results) >= 2:
-        s = survey_spread(results, velocity)
-        payload["spread"] = _spread_json(s)
-        payload["spread"]["reference_epoch_utc"] = _utc(s.reference_epoch_s)
+    if spread is not None and as_surveyed is not None:
+        velocity = spread.velocity
+        payload["spread"] = _spread_json(spread)
+        payload["spread"]["reference_epoch_utc"] = _utc(spread.reference_epoch_s)
         payload["spread"]["site_velocity"] = (
             None
             if velocity is None
-            else {
-                "source": velocity.source,
-                **_enu_mm_yr(velocity.velocity_enu_mm_yr),
-            }
+            else {"source": velocity.source, **_enu_mm_yr(velocity.velocity_enu_mm_yr)}
         )
-        if s.fitted_velocity_enu_mps is not None and s.fitted_velocity_sigma_enu_mps is not None:
-            fit = s.fitted_velocity_enu_mps * _MM_YR
-            fit_sigma = s.fitted_velocity_sigma_enu_mps * _MM_YR
+        if spread.fitted_velocity_enu_mps is not None and spread.fitted_velocity_sigma_enu_mps is not None:
+            fit = spread.fitted_velocity_enu_mps * _MM_YR
+            fit_sigma = spread.fitted_velocity_sigma_enu_mps * _MM_YR
             payload["spread"]["fitted_velocity"] = {
                 f"{axis}_mm_yr": [fit[j], fit_sigma[j]] for axis, j in (("e", 0), ("n", 1), ("u", 2))
             }
-        payload["spread"]["at_survey_epochs"] = _spread_json(survey_spread(results))
+        payload["spread"]["at_survey_epochs"] = _spread_json(as_surveyed)
     else:
         payload["spread"] = {"std_n_m": None, "std_e_m": None, "std_u_m": None}
     return payload
 
 
-_MM_YR = 1e3 * 365.25 * 86400.0
+_MM_YR = 1e3 * SECONDS_PER_YEAR
 
 
 def _enu_mm_yr(v: np.ndarray) -> dict:

@@ -109,17 +109,17 @@ def survey_spread(
     if len(results) < 2:
         raise ConfigError("the spread across surveys needs at least two surveys")
     surveyed = np.array([r.position_enu_m for r in results])
-    sig = np.array([r.sigma_enu_m for r in results])
+    sig_surveyed = np.array([r.sigma_enu_m for r in results])
     epochs = np.array([float(r.epoch_s) for r in results])
     t_ref = float(np.mean(epochs)) if reference_epoch_s is None else float(reference_epoch_s)
     dt = (epochs - t_ref)[:, None]
-    pos = surveyed
+    pos, sig = surveyed, sig_surveyed
     if velocity is not None:
         pos = surveyed - velocity.velocity_enu_mps * dt
         sig = np.sqrt(sig * sig + (velocity.sigma_enu_mps * dt) ** 2)
     dev = pos - pos.mean(axis=0)
     dof = len(results) - 1
-    fit, fit_sigma = _fitted_velocity(surveyed, np.array([r.sigma_enu_m for r in results]), epochs)
+    fit, fit_sigma = _fitted_velocity(surveyed, sig_surveyed, epochs)
     return SurveySpread(
         positions_enu_m=pos,
         sigma_enu_m=sig,

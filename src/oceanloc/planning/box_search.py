@@ -220,7 +220,6 @@ def maximize_in_box(
     lidx = np.arange(u.shape[0])
     lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), np.ones(u.shape[0]), rows.copy()
     ar = np.arange(lidx.size)
-    flat_tol = opts.value_tol
     for _ in range(opts.max_iterations):
         n = lidx.size
         if n == 0:
@@ -269,7 +268,10 @@ def maximize_in_box(
         # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
         # a flat direction would let the point itself keep moving.
         flat = (
-            centre_best & at_max & (s_now < 1e-2) & (predicted_gain <= flat_tol * np.maximum(1.0, np.abs(lf)))
+            centre_best
+            & at_max
+            & (s_now < 1e-2)
+            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
         )
         keep = (ls > scale_min) & ~flat
         if not keep.all():

@@ -170,16 +170,13 @@ class _YawRateObjective:
         pos, est = state.pos_enu_m, state.estimates_m
         chol = scaled_cholesky(state.covariances_m2, planner.sigma_range_m)
         dz = est[..., 2] - pos[:, 2:3]
-        x0 = np.broadcast_to(pos[:, 0:1], dz.shape)
-        y0 = np.broadcast_to(pos[:, 1:2], dz.shape)
-        # (13, B, M, 1): one gather per call; the trailing axis broadcasts over candidates
+        # (10, B, M, 1): one gather per call; the trailing axis broadcasts over candidates. Rows: start
+        # yaw; transponder east and north of the vehicle; L00, L10, L11; dz L20, dz L21, dz L22; dz^2.
         self.table = np.stack(
             [
-                x0,
-                y0,
                 np.broadcast_to(state.yaw_rad[:, None], dz.shape),
-                est[..., 0] - x0,
-                est[..., 1] - y0,
+                est[..., 0] - pos[:, 0:1],
+                est[..., 1] - pos[:, 1:2],
                 chol[..., 0, 0],
                 chol[..., 1, 0],
                 chol[..., 1, 1],
@@ -187,7 +184,6 @@ class _YawRateObjective:
                 dz * chol[..., 2, 1],
                 dz * chol[..., 2, 2],
                 dz * dz,
-                dz,
             ]
         )[..., None]
         self.step_m = planner.speed_mps * planner.period_s
@@ -203,17 +199,17 @@ class _YawRateObjective:
         """``L^T (p_hat - site) / r`` from the horizontal components ``dx, dy`` (broadcast against the
         constants ``t``): :func:`~oceanloc.planning.information.whitened_line_of_sight` with the
         site-independent products precomputed."""
-        inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + t[11])
-        return (dx * t[5] + dy * t[6] + t[8]) * inv_r, (dy * t[7] + t[9]) * inv_r, t[10] * inv_r
+        inv_r = 1.0 / np.sqrt(dx * dx + dy * dy + t[9])
+        return (dx * t[3] + dy * t[4] + t[6]) * inv_r, (dy * t[5] + t[7]) * inv_r, t[8] * inv_r
 
     def __call__(self, rates: FloatArray, rows: IntArray) -> FloatArray:
         t = self._constants(rows)
         k = rates.shape[-1]
         steps = rates.transpose(2, 0, 1)  # (k, b, C)
-        yaw = t[2, :, 0] + np.cumsum(steps, axis=0) * self.period_s
-        px = (np.cumsum(np.cos(yaw), axis=0) * self.step_m)[:, :, None, :]  # (k, b, 1, C), from x0
+        yaw = t[0, :, 0] + np.cumsum(steps, axis=0) * self.period_s
+        px = (np.cumsum(np.cos(yaw), axis=0) * self.step_m)[:, :, None, :]  # (k, b, 1, C), from the start
         py = (np.cumsum(np.sin(yaw), axis=0) * self.step_m)[:, :, None, :]
-        u0, u1, u2 = self._whitened_rows(t[3] - px, t[4] - py, t)  # (k, b, M, C)
+        u0, u1, u2 = self._whitened_rows(t[1] - px, t[2] - py, t)  # (k, b, M, C)
         if k > 3:
             U = np.stack(np.broadcast_arrays(u0, u1, u2), axis=-1)  # (k, b, M, C, 3)
             U = np.moveaxis(U, 0, -2)  # (b, M, C, k, 3)
@@ -234,8 +230,8 @@ class _YawRateObjective:
         if k > 3:
             return None
         c = self._constants(rows)
-        t = c.reshape(*c.shape[:3], *([1] * k))  # (13, b, M, 1, ..., 1)
-        yaw = t[2, :, :1]
+        t = c.reshape(*c.shape[:3], *([1] * k))  # (10, b, M, 1, ..., 1)
+        yaw = t[0, :, :1]
         px = py = 0.0
         rows_u = []
         for j, ax in enumerate(axes):
@@ -244,7 +240,7 @@ class _YawRateObjective:
             yaw = yaw + ax.reshape(shape) * self.period_s
             px = px + np.cos(yaw) * self.step_m
             py = py + np.sin(yaw) * self.step_m
-            rows_u.append(self._whitened_rows(t[3] - px, t[4] - py, t))
+            rows_u.append(self._whitened_rows(t[1] - px, t[2] - py, t))
         gain = log_det_identity_plus_gram(rows_u)  # (b, M, n_0, ..., n_{k-1})
         return gain.sum(axis=1).reshape(gain.shape[0], -1)
 
