@@ -38,7 +38,7 @@ def test_localize_gnssa_json_shape_figures_and_spread(tmp_path: Path):
     assert res.exit_code == 0, res.output
     assert "Spread across 2 surveys" in res.output
     data = json.loads(out.read_text())
-    assert set(data) == {"surveys", "spread"}
+    assert set(data) == {"provenance", "surveys", "spread"}
     assert [s["file"] for s in data["surveys"]] == ["gnssa_data_20211210", "gnssa_data_20220321"]
     assert all(set(s) == KEYS for s in data["surveys"])
     assert {"std_n_m", "std_e_m", "std_u_m", "chi2_n", "sigmas_explain_n", "at_survey_epochs"} <= set(

@@ -13,11 +13,11 @@ from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
 from oceanloc.config.survey_journal import JournalSettings
+from oceanloc.field.survey_journal import next_waypoint, survey_estimates
 from oceanloc.io.journal import Journal
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
-from oceanloc.sim.survey_journal import next_waypoint, survey_estimates
 
 START = ["--planner", "greedy", "--max-distance", "4", "--beacon", "1", "--beacon", "2"]
 

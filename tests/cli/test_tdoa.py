@@ -34,7 +34,7 @@ def test_tdoa_json_shape_and_sign(tmp_path, method):
     )
     assert result.exit_code == 0, result.output
     payload = json.loads(out.read_text())
-    assert set(payload) == {"delay_s", "delay_samples", "method", "first", "peak_ratio"}
+    assert set(payload) == {"provenance", "delay_s", "delay_samples", "method", "first", "peak_ratio"}
     assert payload["delay_samples"] == pytest.approx(37.0, abs=0.05)
     assert payload["delay_s"] == pytest.approx(37.0 / FS, abs=1e-5)
     assert payload["first"] == "B" and payload["method"] == method

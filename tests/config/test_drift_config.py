@@ -1,10 +1,9 @@
 import numpy as np
 import pytest
 
-from oceanloc.config.drift import builtin_drift_scenarios, load_drift_scenario
+from oceanloc.config.drift import builtin_drift_scenarios, load_drift_scenario, problem_from_scenario
 from oceanloc.config.survey import builtin_survey_scenarios
 from oceanloc.errors import ConfigError, OceanlocError
-from oceanloc.planning.drift_rrt.problem import problem_from_scenario
 
 BASE = """
 [scenario]

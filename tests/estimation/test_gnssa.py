@@ -11,7 +11,7 @@ from oceanloc.estimation.gnssa import (
     hat_basis,
     localize_gnssa,
 )
-from oceanloc.evaluation.repeatability import survey_spread
+from oceanloc.field.repeatability import survey_spread
 from oceanloc.geo.plate_motion import plate_site_velocity
 from oceanloc.io.gnssa import GnssaSurvey, lajolla_paths, published_sound_speed_mps, read_gnssa
 from oceanloc.io.qc import QcReport

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from oceanloc.errors import ConfigError
-from oceanloc.evaluation.metrics import chi_square_check, log_det_stats, nees, rmsee
+from oceanloc.estimation.consistency import chi_square_check, nees
+from oceanloc.evaluation.metrics import log_det_stats, rmsee
 
 
 def test_rmsee_eq45():

@@ -5,7 +5,7 @@ import numpy as np
 
 from oceanloc.geo.projection import LocalProjection
 from oceanloc.io.paths import path_geojson, write_path_csv, write_path_geojson
-from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.models.paths import DriftPath
 
 PATH = DriftPath(
     points_m=np.array([[0.0, 0.0], [30.0, 0.0], [60.0, 0.0], [60.0, 500.0], [90.0, 500.0]]),

@@ -4,9 +4,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from oceanloc.models.energy import EnergyBudget
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.nearest import GrowingNearest
 from oceanloc.planning.drift_rrt.objective import HdopTerm, ThesisCost, bearing_hdop
-from oceanloc.planning.drift_rrt.path import DriftPath
 
 
 @settings(max_examples=30, deadline=None)

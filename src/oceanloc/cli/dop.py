@@ -56,7 +56,7 @@ def dop_map(
     netcdf: Annotated[Path | None, typer.Option("--netcdf", help="Write the map as NetCDF (xarray).")] = None,
 ) -> None:
     """HDOP as one more node moves over a grid around fixed nodes and a target (thesis Figs. 32, 48)."""
-    from oceanloc.report import flock_figures
+    from oceanloc.report.figures import flock as flock_figures
 
     _check_kind(kind)
     if not sigma > 0:
@@ -116,7 +116,7 @@ def dop_place(
     json_path: Annotated[Path | None, typer.Option("--json", help="Write the placement as JSON.")] = None,
 ) -> None:
     """HDOP-optimal placement of nodes around a target within stand-off ranges (thesis Figs. 34-35)."""
-    from oceanloc.report import flock_figures
+    from oceanloc.report.figures import flock as flock_figures
 
     _check_kind(kind)
     if not sigma > 0:

@@ -11,12 +11,12 @@ from rich.table import Table
 
 from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console
-from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario
+from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
 from oceanloc.io.paths import write_path_csv, write_path_geojson
 from oceanloc.planning.drift_rrt.planner import make_planner
-from oceanloc.planning.drift_rrt.problem import PlanBudget, problem_from_scenario
+from oceanloc.planning.drift_rrt.problem import PlanBudget
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 
 
@@ -50,7 +50,7 @@ def drift_plan(
     ),
 ) -> None:
     """Plan the least-energy drift/flight route of a scenario; print its summary, write PNG, CSV, GeoJSON."""
-    from oceanloc.report.drift_figures import paths_figure, tree_figure
+    from oceanloc.report.figures.drift import paths_figure, tree_figure
 
     sc = load_drift_scenario(scenario)
     name = planner or sc.planner

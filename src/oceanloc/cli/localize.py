@@ -13,7 +13,7 @@ from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console, write_json
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa
-from oceanloc.evaluation.repeatability import SurveySpread, survey_spread
+from oceanloc.field.repeatability import SurveySpread, survey_spread
 from oceanloc.geo.plate_motion import SECONDS_PER_YEAR, SiteVelocity, given_site_velocity, plate_site_velocity
 from oceanloc.io.gnssa import (
     GPS_EPOCH_2020_UNIX_S,
@@ -124,7 +124,7 @@ def gnssa(
         spread, as_surveyed = survey_spread(results, velocity), survey_spread(results)
         _print_spread(spread, as_surveyed if velocity is not None else None)
     if figures is not None:
-        from oceanloc.report.field_figures import gnssa_residual_figure, gnssa_spread_figure
+        from oceanloc.report.figures.field import gnssa_residual_figure, gnssa_spread_figure
 
         ensure_dir(figures)
         for s, r in zip(surveys, results, strict=True):
@@ -443,7 +443,7 @@ def noise(
         f" total range sigma is {total:.3f} m (journal VI-B); use it as --sigma-range"
     )
     if figures is not None:
-        from oceanloc.report.field_figures import range_noise_figure
+        from oceanloc.report.figures.field import range_noise_figure
 
         err_console.print(f"wrote {range_noise_figure(estimates, ensure_dir(figures) / 'range_noise.png')}")
     if json_path is not None:

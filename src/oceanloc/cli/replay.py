@@ -24,11 +24,11 @@ from oceanloc.cli._common import (
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions
 from oceanloc.evaluation.montecarlo import open_executor
+from oceanloc.field.replay import DEFAULT_PLANNERS, RecordSet, ReplaySettings, planner_label, planner_settings
 from oceanloc.geo.enu import EnuOrigin
 from oceanloc.io.gnssa import lajolla_paths, read_gnssa, survey_sound_speeds_mps
 from oceanloc.reproduce import garcia2019_replay as rep
 from oceanloc.sim.logs import PIER_ORIGIN
-from oceanloc.sim.replay import DEFAULT_PLANNERS, RecordSet, ReplaySettings, planner_label, planner_settings
 
 app = typer.Typer(
     help="Replay planning on recorded data: each planner chooses which recorded ping to use next "
@@ -369,7 +369,7 @@ def _convergence_table(exp: rep.ReplayExperiment, *, unit_m: float = 1.0) -> Tab
 
 
 def _figures(exp: rep.ReplayExperiment, out: Path, stem: str, *, unit_m: float) -> None:
-    from oceanloc.report.replay_figures import replay_curves_figure, replay_tracks_figure
+    from oceanloc.report.figures.replay import replay_curves_figure, replay_tracks_figure
 
     replay_curves_figure(
         exp.studies, 0, out / f"{stem}_replay_curves.png", f"{exp.records.name}: replay on recorded data",

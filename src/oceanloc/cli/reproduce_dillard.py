@@ -114,7 +114,7 @@ def dillard_filters(
     scheduler: Scheduler = None,
 ) -> None:
     """Thesis Table 2: EKF vs UKF bearing-only tracking by four drifting nodes (Chapter III.E)."""
-    from oceanloc.report import flock_figures
+    from oceanloc.report.figures import flock as flock_figures
 
     sc = load_flock_scenario(scenario)
     if duration is not None:
@@ -172,7 +172,7 @@ def dillard_lab_tdoa(
     scheduler: Scheduler = None,
 ) -> None:
     """Thesis lab test: TDOA UKF, three nodes in a Y, random target; residual vs HDOP (Chapter V.C)."""
-    from oceanloc.report import flock_figures
+    from oceanloc.report.figures import flock as flock_figures
 
     with open_executor(scheduler, workers) as executor, progress_bar(runs, "Monte Carlo runs") as advance:
         res = reproduce_dillard_lab_tdoa(scenario, runs=runs, seed=seed, executor=executor, progress=advance)

@@ -141,7 +141,7 @@ def _print_report(report: DillardReport, runs: int, iterations: int) -> None:
 
 
 def _figures(folder: Path, report: DillardReport, seed: int, iterations: int) -> None:
-    from oceanloc.report.drift_figures import energy_figure, paths_figure, tree_figure
+    from oceanloc.report.figures.drift import energy_figure, paths_figure, tree_figure
 
     problem = thesis_problem()
     rng = run_generators(seed, [0])[0]

@@ -21,7 +21,7 @@ from oceanloc.cli._common import (
 )
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor
-from oceanloc.report.tables import checks_table, reproduction_table
+from oceanloc.report.tables.survey import checks_table, reproduction_table
 from oceanloc.reproduce import garcia2018, garcia2019
 from oceanloc.reproduce.survey_tables import MajorAxisSweep
 
@@ -98,7 +98,7 @@ def garcia2018_command(
     scheduler: Scheduler = None,
 ) -> None:
     """Tables 5.3 and 5.7 and Fig. 5.3."""
-    from oceanloc.report import survey_figures
+    from oceanloc.report.figures import survey as survey_figures
 
     seed = 2018 if seed is None else seed
     with open_executor(scheduler, workers) as executor, progress_bar(4 * runs, "Monte Carlo runs") as advance:
@@ -168,7 +168,7 @@ def _sweep_line(sweep: MajorAxisSweep, title: str) -> str:
 
 
 def _sweep_figure(sweep: MajorAxisSweep, path: Path, title: str) -> Path:
-    from oceanloc.report import survey_figures
+    from oceanloc.report.figures import survey as survey_figures
 
     return survey_figures.major_axis_figure(
         sweep.planned_enu_m[:, :2], sweep.reaches_m, sweep.start_enu_m[:2], sweep.estimate_m[:2],
@@ -177,7 +177,7 @@ def _sweep_figure(sweep: MajorAxisSweep, path: Path, title: str) -> Path:
 
 
 def _garcia2019_figures(result: garcia2019.Garcia2019Result, out: Path) -> None:
-    from oceanloc.report import survey_figures
+    from oceanloc.report.figures import survey as survey_figures
 
     est = result.estimator
     survey_figures.estimates_figure(

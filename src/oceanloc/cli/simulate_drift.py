@@ -20,11 +20,10 @@ from oceanloc.cli._common import (
     progress_bar,
     write_json,
 )
-from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario
+from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor, run_chunked
 from oceanloc.planning.drift_rrt.planner import make_planner
-from oceanloc.planning.drift_rrt.problem import problem_from_scenario
 from oceanloc.sim.drifters import swap_positions
 from oceanloc.sim.path_following import FollowingTask, follow_plans, merge_following, summarize_following
 
@@ -54,7 +53,7 @@ def drift_follow(
     scheduler: Scheduler = None,
 ) -> None:
     """Follow a plan with watch circles in a perturbed current; arrival rate, extra energy, replans."""
-    from oceanloc.report.drift_figures import following_figure
+    from oceanloc.report.figures.drift import following_figure
 
     sc = load_drift_scenario(scenario)
     name, plan_fn = _planner(planner, sc.planner)
@@ -115,7 +114,7 @@ def drift_swap(
     figures: Annotated[Path | None, typer.Option("--figures", help="Write PNG figures here.")] = None,
 ) -> None:
     """Two drifters swap positions (thesis Figs. 68-71): both plans, then both followed in a true current."""
-    from oceanloc.report.drift_figures import following_figure, paths_figure
+    from oceanloc.report.figures.drift import following_figure, paths_figure
 
     sc = load_drift_scenario(scenario)
     name, plan_fn = _planner(planner, sc.planner)

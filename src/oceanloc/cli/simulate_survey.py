@@ -25,7 +25,7 @@ from oceanloc.cli._common import (
 )
 from oceanloc.config.survey import PlannerSettings, SurveyScenario, load_survey_scenario
 from oceanloc.errors import ConfigError
-from oceanloc.evaluation.ellipses import confidence_ellipse
+from oceanloc.estimation.consistency import confidence_ellipse
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.evaluation.survey import SurveyMonteCarlo, survey_monte_carlo
 from oceanloc.sim.survey import SurveyRuns, simulate_surveys
@@ -96,7 +96,7 @@ def _with_overrides(
 
 
 def _single_run(scen: SurveyScenario, seed: int, json_path: Path | None, figures: Path | None) -> None:
-    from oceanloc.report import survey_figures
+    from oceanloc.report.figures import survey as survey_figures
 
     run = simulate_surveys(scen, [0], seed)
     final = run.estimates_m[0, -1]
@@ -172,7 +172,7 @@ def _epoch_table(run: SurveyRuns, scen: SurveyScenario) -> Table:
 
 
 def _monte_carlo_report(result: SurveyMonteCarlo, json_path: Path | None, figures: Path | None) -> None:
-    from oceanloc.report import survey_figures
+    from oceanloc.report.figures import survey as survey_figures
 
     scen = result.scenario
     epochs = sorted({n for n in (*_REPORT_EPOCHS, scen.epochs) if n <= scen.epochs})

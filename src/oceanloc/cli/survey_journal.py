@@ -2,7 +2,7 @@
 
 Every fix, heading and range goes into an SQLite journal, one transaction per record
 (:mod:`oceanloc.io.journal`); the estimates and the next waypoint are computed from the journal alone
-(:mod:`oceanloc.sim.survey_journal`), so a killed process loses nothing committed and a re-run gives the
+(:mod:`oceanloc.field.survey_journal`), so a killed process loses nothing committed and a re-run gives the
 same numbers.
 """
 
@@ -23,12 +23,7 @@ from oceanloc.cli._common import console, err_console, write_json
 from oceanloc.config.survey import PlannerSettings
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError
-from oceanloc.geo.enu import EnuOrigin
-from oceanloc.io.journal import AppendCounts, Journal, append_gps_log, append_range_log
-from oceanloc.io.nmea import read_nmea
-from oceanloc.io.qc import QcReport
-from oceanloc.io.usbl import format_utc, read_usbl
-from oceanloc.sim.survey_journal import (
+from oceanloc.field.survey_journal import (
     MIN_RANGES,
     RANGE_STATUS,
     SurveyEstimates,
@@ -36,6 +31,11 @@ from oceanloc.sim.survey_journal import (
     next_waypoint,
     survey_estimates,
 )
+from oceanloc.geo.enu import EnuOrigin
+from oceanloc.io.journal import AppendCounts, Journal, append_gps_log, append_range_log
+from oceanloc.io.nmea import read_nmea
+from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import format_utc, read_usbl
 from oceanloc.units import DEG
 
 app = typer.Typer(
@@ -255,7 +255,7 @@ def export(
     ] = None,
 ) -> None:
     """Export the beacon estimates with their 95% ellipses and the track (GeoJSON), and every table (CSV)."""
-    from oceanloc.sim.survey_journal_export import export_csv, export_geojson
+    from oceanloc.field.survey_journal_export import export_csv, export_geojson
 
     if geojson is None and csv is None:
         raise ConfigError("nothing to export: give --geojson PATH and/or --csv DIR")

@@ -34,7 +34,7 @@ def tdoa(
     Cross-correlation or GCC-PHAT with band-limited sub-sample interpolation of the peak; the peak ratio
     (main correlation peak over the largest value outside its main lobe) says how unambiguous it is.
     """
-    from oceanloc.report import flock_figures
+    from oceanloc.report.figures import flock as flock_figures
 
     if method not in DELAY_METHODS:
         raise ConfigError(f"--method must be one of {', '.join(DELAY_METHODS)}; got '{method}'")

@@ -85,10 +85,15 @@ from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
 from oceanloc.models.obstacles import ObstacleMap
+from oceanloc.planning.drift_rrt.objective import HdopTerm
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
+from oceanloc.planning.drift_rrt.problem import DriftProblem
+from oceanloc.planning.drift_rrt.propagation import DriftPropagator
+from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.units import DEG
 
 CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
-DRIFT_PLANNERS: tuple[str, ...] = ("thesis-single", "thesis-optimality-seeking", "oceanloc")
+DRIFT_PLANNERS: tuple[str, ...] = PLANNER_NAMES
 """``thesis-single``: DR-RRT* stopping at its first solution; ``thesis-optimality-seeking``: DR-RRT* over
 25,000 iterations keeping the cheapest solution; ``oceanloc``: the drift/hop lattice planner."""
 
@@ -133,7 +138,7 @@ class FollowingSettings:
 @dataclass(frozen=True, slots=True, kw_only=True)
 class DriftScenario:
     """A validated drift-planning scenario (build the planning problem with
-    :func:`oceanloc.planning.drift_rrt.problem.problem_from_scenario`).
+    :func:`problem_from_scenario`).
 
     Attributes
     ----------
@@ -399,4 +404,25 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         following=following,
         projection=projection,
         currents_description=cur_desc,
+    )
+
+
+def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
+    """The planning problem a validated scenario file describes."""
+    hdop = None
+    if scenario.hdop_others_m is not None and scenario.hdop_target_m is not None:
+        hdop = HdopTerm(others_m=scenario.hdop_others_m, target_m=scenario.hdop_target_m)
+    return DriftProblem(
+        space=DriftSpace(
+            obstacles=scenario.obstacles, flights_avoid_obstacles=scenario.flights_avoid_obstacles
+        ),
+        propagator=DriftPropagator(field=scenario.current, dt_s=scenario.dt_s, method=scenario.integrator),
+        start_m=scenario.start_m,
+        goal_m=scenario.goal_m,
+        goal_tolerance_m=scenario.goal_tolerance_m,
+        energy=scenario.energy,
+        hdop=hdop,
+        horizon_s=scenario.horizon_s,
+        max_leg_m=scenario.max_leg_m,
+        time_weight_wh_per_h=scenario.time_weight_wh_per_h,
     )

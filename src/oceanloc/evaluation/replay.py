@@ -1,6 +1,6 @@
 """Monte Carlo of replays on recorded measurements (Garcia et al. 2019, Section VI) and their metrics.
 
-:func:`replay_monte_carlo` runs :func:`oceanloc.sim.replay.replay_surveys` for one planner over chunks of
+:func:`replay_monte_carlo` runs :func:`oceanloc.field.replay.replay_surveys` for one planner over chunks of
 runs through :func:`oceanloc.evaluation.montecarlo.run_chunked` (this process, local processes or
 Dask) and summarizes them: RMSEE per epoch and transponder (eq. 45, against the record set's
 reference), mean and standard deviation of ``log det Y_n``, mean NEES (eq. 44). Every run draws from its
@@ -20,7 +20,7 @@ import numpy as np
 from oceanloc._typing import FloatArray
 from oceanloc.evaluation.metrics import LogDetStats, log_det_stats, rmsee
 from oceanloc.evaluation.montecarlo import run_chunked
-from oceanloc.sim.replay import (
+from oceanloc.field.replay import (
     RecordSet,
     ReplayRuns,
     ReplaySettings,

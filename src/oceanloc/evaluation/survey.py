@@ -18,7 +18,8 @@ import numpy as np
 
 from oceanloc._typing import FloatArray
 from oceanloc.config.survey import SurveyScenario
-from oceanloc.evaluation.metrics import ChiSquareCheck, LogDetStats, chi_square_check, log_det_stats, rmsee
+from oceanloc.estimation.consistency import ChiSquareCheck, chi_square_check
+from oceanloc.evaluation.metrics import LogDetStats, log_det_stats, rmsee
 from oceanloc.evaluation.montecarlo import run_chunked
 from oceanloc.sim.survey import SurveyRuns, simulate_surveys
 

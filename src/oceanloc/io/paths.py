@@ -18,7 +18,7 @@ import numpy as np
 
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.models.paths import DriftPath
 
 
 def write_path_csv(path: str | Path, plan: DriftPath, projection: LocalProjection | None = None) -> Path:

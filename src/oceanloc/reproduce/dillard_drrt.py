@@ -24,12 +24,12 @@ import numpy as np
 
 from oceanloc._random import run_generators
 from oceanloc._typing import BoolArray, FloatArray
-from oceanloc.config.drift import load_drift_scenario
+from oceanloc.config.drift import load_drift_scenario, problem_from_scenario
 from oceanloc.evaluation.montecarlo import concat_fields, run_chunked
 from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult, problem_from_scenario
+from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
 from oceanloc.planning.drift_rrt.reference import REFERENCE_OPTIONS, best_achievable
 from oceanloc.planning.drift_rrt.space import DriftSpace
 

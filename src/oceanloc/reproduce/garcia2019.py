@@ -30,9 +30,15 @@ import numpy as np
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import FloatArray
 from oceanloc.config.survey import PlannerSettings, SurveyScenario, load_survey_scenario
+from oceanloc.estimation.consistency import (
+    ChiSquareCheck,
+    ConfidenceEllipse,
+    chi_square_check,
+    confidence_ellipse,
+    nees,
+    sample_ellipse,
+)
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, RangeProblem, solve_map
-from oceanloc.evaluation.ellipses import ConfidenceEllipse, confidence_ellipse, sample_ellipse
-from oceanloc.evaluation.metrics import ChiSquareCheck, chi_square_check, nees
 from oceanloc.evaluation.survey import SurveyMonteCarlo, survey_monte_carlo
 from oceanloc.models.measurements import range_m
 from oceanloc.planning.measurement_sites import LookaheadPlanner

@@ -7,8 +7,8 @@ measurement locations per run chosen by each planner among the ranges recorded a
 RMSEE of ``m = 1``). The thesis (Tables 6.2 and 6.6) adds the greedy planner within ``d_max = 10`` m
 against a random point in that disk. :func:`replay_logs` runs that experiment on a GPS + USBL log pair
 (for example ``oceanloc simulate logs``); :func:`replay_gnssa` runs it on a GNSS-A survey, with the
-reference solution over all pings as the truth. Readings: :mod:`oceanloc.sim.replay`,
-:mod:`oceanloc.sim.replay_records` and :func:`gnssa_replay_settings`.
+reference solution over all pings as the truth. Readings: :mod:`oceanloc.field.replay`,
+:mod:`oceanloc.field.replay_records` and :func:`gnssa_replay_settings`.
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from oceanloc._typing import FloatArray
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult
 from oceanloc.evaluation.replay import ReplayStudy, epochs_to_reach, replay_planners
+from oceanloc.field.replay import DEFAULT_PLANNERS, RECORDED, RecordSet, ReplaySettings
+from oceanloc.field.replay_records import gnssa_replay_records, log_reference, range_log_records
 from oceanloc.io.gnssa import GnssaSurvey
 from oceanloc.io.usbl import AlignedRanges
-from oceanloc.sim.replay import DEFAULT_PLANNERS, RECORDED, RecordSet, ReplaySettings
-from oceanloc.sim.replay_records import gnssa_replay_records, log_reference, range_log_records
 from oceanloc.units import DEG
 
 TABULATED_EPOCHS: tuple[int, ...] = (3, 7, 30)

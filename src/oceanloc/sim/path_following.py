@@ -25,7 +25,7 @@ from oceanloc._typing import BoolArray, FloatArray
 from oceanloc.config.drift import FollowingSettings
 from oceanloc.models.currents import CurrentField, Scalar
 from oceanloc.models.drift import step_function
-from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
 
 Replanner = Callable[[DriftProblem, np.random.Generator], PlanResult]

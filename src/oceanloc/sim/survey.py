@@ -28,8 +28,8 @@ import numpy as np
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from oceanloc.config.survey import PlannerSettings, SurveyScenario
+from oceanloc.estimation.consistency import nees
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, RangeProblem, solve_map
-from oceanloc.evaluation.metrics import nees
 from oceanloc.models.measurements import range_m
 from oceanloc.planning.information import log_det_information
 from oceanloc.planning.measurement_sites import (

@@ -8,7 +8,7 @@
   :func:`.reference.best_achievable` (the fine-lattice yardstick).
 """
 
-from oceanloc.planning.drift_rrt.path import DriftPath, PathEnergy
+from oceanloc.models.paths import DriftPath, PathEnergy
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult, PlanStatus, SearchTree
 

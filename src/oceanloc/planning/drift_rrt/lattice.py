@@ -36,6 +36,7 @@ import time
 import numpy as np
 
 from oceanloc._typing import FloatArray
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.lattice_refine import refine_plan
 from oceanloc.planning.drift_rrt.lattice_values import (
     EnvelopeKind,
@@ -47,7 +48,6 @@ from oceanloc.planning.drift_rrt.lattice_values import (
     legs_objective,
     sample_drift,
 )
-from oceanloc.planning.drift_rrt.path import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult, PlanStatus
 
 __all__ = ["EnvelopeKind", "LatticeOptions", "objective", "plan_lattice"]

@@ -7,16 +7,17 @@ it to worker processes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 
-from oceanloc.config.drift import DRIFT_PLANNERS
 from oceanloc.errors import ConfigError
 from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
 from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 
-PLANNER_NAMES: tuple[str, ...] = DRIFT_PLANNERS
+DriftPlannerName = Literal["thesis-single", "thesis-optimality-seeking", "oceanloc"]
+PLANNER_NAMES: tuple[str, ...] = get_args(DriftPlannerName)
 
 
 @dataclass(frozen=True, slots=True)

@@ -12,11 +12,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
-from oceanloc.config.drift import DriftScenario
 from oceanloc.errors import ConfigError
 from oceanloc.models.energy import EnergyBudget
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.objective import HdopTerm
-from oceanloc.planning.drift_rrt.path import DriftPath
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.planning.status import PlanStatus
@@ -194,24 +193,3 @@ class PlanResult:
         if not self.success:
             return float("nan")
         return 1.0 - self.flight_energy_wh / self.direct_flight_wh
-
-
-def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
-    """The planning problem a validated scenario file describes."""
-    hdop = None
-    if scenario.hdop_others_m is not None and scenario.hdop_target_m is not None:
-        hdop = HdopTerm(others_m=scenario.hdop_others_m, target_m=scenario.hdop_target_m)
-    return DriftProblem(
-        space=DriftSpace(
-            obstacles=scenario.obstacles, flights_avoid_obstacles=scenario.flights_avoid_obstacles
-        ),
-        propagator=DriftPropagator(field=scenario.current, dt_s=scenario.dt_s, method=scenario.integrator),
-        start_m=scenario.start_m,
-        goal_m=scenario.goal_m,
-        goal_tolerance_m=scenario.goal_tolerance_m,
-        energy=scenario.energy,
-        hdop=hdop,
-        horizon_s=scenario.horizon_s,
-        max_leg_m=scenario.max_leg_m,
-        time_weight_wh_per_h=scenario.time_weight_wh_per_h,
-    )

@@ -39,9 +39,9 @@ from typing import Literal
 import numpy as np
 
 from oceanloc.errors import ConfigError
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.nearest import GrowingNearest
 from oceanloc.planning.drift_rrt.objective import ThesisCost
-from oceanloc.planning.drift_rrt.path import DriftPath
 from oceanloc.planning.drift_rrt.problem import (
     DriftProblem,
     PlanBudget,

@@ -41,6 +41,7 @@ from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from oceanloc.config.survey import PlannerSettings
 from oceanloc.errors import ConfigError, DataError
+from oceanloc.estimation.consistency import nees
 from oceanloc.estimation.map_gauss_newton import (
     GaussianPrior,
     MapOptions,
@@ -48,7 +49,6 @@ from oceanloc.estimation.map_gauss_newton import (
     WhitenedModel,
     solve_map,
 )
-from oceanloc.evaluation.metrics import nees
 from oceanloc.models.measurements import two_way_range_jacobian, two_way_range_m
 from oceanloc.planning.information import log_det_information
 from oceanloc.planning.measurement_sites import MeasurementSitePlanner, PlanningState

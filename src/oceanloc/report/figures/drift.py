@@ -14,9 +14,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon, Rectangle
 
 from oceanloc._typing import FloatArray
-from oceanloc.planning.drift_rrt.path import DriftPath
+from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree
-from oceanloc.report._figures import save_figure
+from oceanloc.report.figures._style import save_figure
 
 PATH_COLOURS = {
     "thesis-single": "tab:orange",

@@ -9,8 +9,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from oceanloc.evaluation.replay import ReplayStudy
-from oceanloc.report._figures import save_figure
-from oceanloc.sim.replay import RECORDED, RecordSet, planner_label
+from oceanloc.field.replay import RECORDED, RecordSet, planner_label
+from oceanloc.report.figures._style import save_figure
 
 _COLOURS = {
     RECORDED: "black",

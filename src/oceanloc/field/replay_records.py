@@ -1,4 +1,4 @@
-"""Record sets for replays (:mod:`oceanloc.sim.replay`) from field data: GNSS-A pings and GPS + USBL logs.
+"""Record sets for replays (:mod:`oceanloc.field.replay`) from field data: GNSS-A pings and GPS + USBL logs.
 
 * **GNSS-A** (:func:`gnssa_records`): one record per ping that the reference solution
   (:func:`oceanloc.estimation.gnssa.localize_gnssa` over all pings) used; its outliers are left out. The
@@ -24,10 +24,10 @@ from oceanloc._typing import ArrayLike, BoolArray
 from oceanloc.errors import DataError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, hat_basis, localize_gnssa
 from oceanloc.estimation.range_logs import BeaconEstimate, localize_beacons
+from oceanloc.field.replay import RecordSet
 from oceanloc.io.gnssa import GnssaSurvey
 from oceanloc.io.usbl import AlignedRanges
 from oceanloc.models.acoustics import gradient_path_m2, refraction_shortening_m
-from oceanloc.sim.replay import RecordSet
 
 SIGMA_EPS_M = 1.006
 """The journal's total range sigma for the pier experiment (USBL 113 mm and GPS 1 m, Section VI-B)."""

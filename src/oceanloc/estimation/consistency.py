@@ -1,4 +1,5 @@
-"""Confidence ellipses from 2x2 covariances (Garcia et al. 2019, Appendix B).
+"""Consistency of an estimate with its covariance: NEES (Garcia et al. 2019, eq. 44) and its chi-square
+check, and confidence ellipses from 2x2 covariances (Appendix B).
 
 For an estimate ``p`` with covariance ``P``, the ``q`` confidence region of a 2-D Gaussian is the ellipse
 with semi-axes ``c sqrt(lambda_max)`` and ``c sqrt(lambda_min)`` along the eigenvectors of ``P``, where
@@ -93,3 +94,73 @@ def sample_ellipse(points_m: ArrayLike, confidence: float = 0.95) -> ConfidenceE
     if pts.ndim != 2 or pts.shape[0] < 3 or pts.shape[1] != 2:
         raise ConfigError(f"need at least 3 points of shape (S, 2), got {pts.shape}")
     return confidence_ellipse(pts.mean(axis=0), np.cov(pts.T), confidence)
+
+
+def nees(errors_m: ArrayLike, information: ArrayLike) -> FloatArray:
+    """Normalized estimation error squared, eq. (44), over the block-diagonal ``Y_n``.
+
+    Parameters
+    ----------
+    errors_m : (..., M, 3) float
+        Position errors of all transponders.
+    information : (..., M, 3, 3) float
+        Their information matrices ``Y_n^m``.
+
+    Returns
+    -------
+    (...) float
+        ``sum_m e_m^T Y_m e_m``; chi-square with ``3M`` degrees of freedom for a consistent estimator.
+    """
+    e = np.asarray(errors_m, dtype=float)
+    return np.einsum("...mi,...mij,...mj->...", e, np.asarray(information, dtype=float), e)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ChiSquareCheck:
+    """Consistency of NEES samples with ``chi2(dof)``.
+
+    Attributes
+    ----------
+    mean : float
+        Sample mean of the NEES.
+    dof : int
+        Degrees of freedom (``3M``).
+    runs : int
+        Number of samples.
+    mean_band : tuple[float, float]
+        ``dof +- 3 sqrt(2 dof / runs)``: three Monte Carlo standard errors of the mean.
+    p_value : float
+        Kolmogorov-Smirnov goodness-of-fit p-value against ``chi2(dof)``.
+    """
+
+    mean: float
+    dof: int
+    runs: int
+    mean_band: tuple[float, float]
+    p_value: float
+
+    @property
+    def mean_within_band(self) -> bool:
+        return self.mean_band[0] <= self.mean <= self.mean_band[1]
+
+
+def chi_square_check(samples: ArrayLike, dof: int) -> ChiSquareCheck:
+    """Compare NEES samples (one per run) with ``chi2(dof)``: mean within 3 SE, KS p-value."""
+    x = np.asarray(samples, dtype=float).ravel()
+    if x.size < 2 or dof < 1:
+        raise ConfigError(f"need at least 2 samples and dof >= 1, got {x.size} samples, dof {dof}")
+    half = 3.0 * np.sqrt(2.0 * dof / x.size)
+    return ChiSquareCheck(
+        mean=float(x.mean()),
+        dof=int(dof),
+        runs=int(x.size),
+        mean_band=(dof - half, dof + half),
+        p_value=float(_stats().kstest(x, _stats().chi2(dof).cdf).pvalue),
+    )
+
+
+def _stats():
+    """``scipy.stats``, imported on first use (it adds a second to the command line's start)."""
+    from scipy import stats
+
+    return stats

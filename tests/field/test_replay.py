@@ -8,13 +8,13 @@ from oceanloc.config.survey import PlannerSettings, load_survey_scenario
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.gnssa import GnssaOptions
 from oceanloc.evaluation.replay import epochs_to_reach, replay_monte_carlo
+from oceanloc.field.replay import RecordSet, ReplaySettings, planner_settings, replay_surveys, snap_to_records
+from oceanloc.field.replay_records import gnssa_replay_records, range_log_records
 from oceanloc.io.gnssa import lajolla_paths, published_sound_speed_mps, read_gnssa
 from oceanloc.io.usbl import AlignedRanges
 from oceanloc.models.measurements import range_m
 from oceanloc.reproduce.garcia2019_replay import gnssa_replay_settings
 from oceanloc.sim.logs import PIER_ORIGIN
-from oceanloc.sim.replay import RecordSet, ReplaySettings, planner_settings, replay_surveys, snap_to_records
-from oceanloc.sim.replay_records import gnssa_replay_records, range_log_records
 from oceanloc.sim.survey import simulate_surveys
 
 

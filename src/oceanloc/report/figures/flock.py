@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from oceanloc.estimation.time_delay import DelayEstimate
 from oceanloc.planning.dop import DopMap, PlacementResult
-from oceanloc.report._figures import save_figure
+from oceanloc.report.figures._style import save_figure
 from oceanloc.reproduce.dillard_filters import DillardFiltersResult
 from oceanloc.reproduce.dillard_lab_tdoa import LabTdoaResult
 

@@ -13,9 +13,9 @@ from matplotlib.figure import Figure
 
 from oceanloc.estimation.gnssa import GnssaResult
 from oceanloc.estimation.noise import StationaryNoise
-from oceanloc.evaluation.repeatability import SurveySpread
+from oceanloc.field.repeatability import SurveySpread
 from oceanloc.io.gnssa import GnssaSurvey
-from oceanloc.report._figures import save_figure
+from oceanloc.report.figures._style import save_figure
 
 
 def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) -> Path:

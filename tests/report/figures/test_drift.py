@@ -1,7 +1,7 @@
 import numpy as np
 
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
-from oceanloc.report.drift_figures import energy_figure, following_figure, paths_figure, tree_figure
+from oceanloc.report.figures.drift import energy_figure, following_figure, paths_figure, tree_figure
 from oceanloc.reproduce.dillard_drrt import thesis_problem
 
 

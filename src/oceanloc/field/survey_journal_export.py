@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from oceanloc.field.survey_journal import ELLIPSE_CONFIDENCE, RANGE_STATUS, SurveyEstimates
 from oceanloc.io.csv_tables import write_csv
 from oceanloc.io.geojson import line_feature, point_feature, polygon_feature, write_geojson
 from oceanloc.io.journal import JournalRecords
 from oceanloc.io.usbl import format_utc
-from oceanloc.sim.survey_journal import ELLIPSE_CONFIDENCE, RANGE_STATUS, SurveyEstimates
 
 CSV_FILES: tuple[str, ...] = ("fixes.csv", "headings.csv", "ranges.csv", "estimates.csv")
 

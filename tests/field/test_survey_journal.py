@@ -11,14 +11,14 @@ from oceanloc.config.survey import PlannerSettings
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
 from oceanloc.estimation.range_logs import localize_beacons
+from oceanloc.field.survey_journal import RANGE_STATUS, next_waypoint, survey_estimates, vehicle_yaw
+from oceanloc.field.survey_journal_export import export_csv, export_geojson
 from oceanloc.io.geojson import ring_signed_area
 from oceanloc.io.journal import Journal, JournalRecords, append_gps_log, append_range_log
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import align_ranges, read_usbl
 from oceanloc.planning.measurement_sites import GreedyPlanner, LookaheadPlanner, PlanningState
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
-from oceanloc.sim.survey_journal import RANGE_STATUS, next_waypoint, survey_estimates, vehicle_yaw
-from oceanloc.sim.survey_journal_export import export_csv, export_geojson
 
 SETTINGS = JournalSettings(planner=PlannerSettings(kind="greedy", max_distance_m=4.0), beacons=(1, 2))
 

@@ -10,9 +10,9 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from oceanloc._typing import FloatArray
-from oceanloc.evaluation.ellipses import ConfidenceEllipse, confidence_ellipse
+from oceanloc.estimation.consistency import ConfidenceEllipse, confidence_ellipse
 from oceanloc.evaluation.survey import SurveyMonteCarlo
-from oceanloc.report._figures import save_figure
+from oceanloc.report.figures._style import save_figure
 from oceanloc.sim.survey import SurveyRuns
 
 _K_COLOURS = {0: "tab:gray", 1: "tab:blue", 2: "tab:orange", 3: "tab:green"}

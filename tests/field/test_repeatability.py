@@ -5,7 +5,7 @@ import pytest
 from scipy import stats
 
 from oceanloc.errors import ConfigError
-from oceanloc.evaluation.repeatability import survey_spread
+from oceanloc.field.repeatability import survey_spread
 from oceanloc.geo.plate_motion import SECONDS_PER_YEAR, SiteVelocity, given_site_velocity
 
 YEAR = SECONDS_PER_YEAR

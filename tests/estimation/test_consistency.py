@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from oceanloc.errors import ConfigError
-from oceanloc.evaluation.ellipses import confidence_ellipse, ellipse_scale, sample_ellipse
+from oceanloc.estimation.consistency import confidence_ellipse, ellipse_scale, sample_ellipse
 
 
 def test_scale_is_appendix_b_value():

@@ -25,8 +25,8 @@ import numpy as np
 from oceanloc._typing import FloatArray, IntArray
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
+from oceanloc.estimation.consistency import ConfidenceEllipse, confidence_ellipse
 from oceanloc.estimation.range_logs import localize_beacons
-from oceanloc.evaluation.ellipses import ConfidenceEllipse, confidence_ellipse
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.journal import JournalRecords
 from oceanloc.io.usbl import AlignedRanges, align_ranges

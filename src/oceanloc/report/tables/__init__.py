@@ -1,0 +1,1 @@
+"""Terminal tables (rich), one module per domain; every column header states its unit."""
