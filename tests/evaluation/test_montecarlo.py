@@ -34,3 +34,38 @@ def test_bad_specs_are_user_errors():
         pass
     with pytest.raises(ConfigError, match="--workers"), open_executor(None, 0):
         pass
+
+
+def test_concat_runs_joins_arrays_and_dicts_and_keeps_the_named_fields():
+    import dataclasses
+
+    from oceanloc.evaluation.montecarlo import concat_runs
+
+    @dataclasses.dataclass(frozen=True)
+    class Part:
+        truth: np.ndarray
+        errors: np.ndarray
+        per_filter: dict
+        name: str
+
+    parts = [
+        Part(truth=np.ones(3), errors=np.arange(2.0), per_filter={"ekf": np.arange(2)}, name="a"),
+        Part(truth=np.ones(3), errors=np.arange(2.0, 5.0), per_filter={"ekf": np.arange(2, 5)}, name="a"),
+    ]
+    joined = concat_runs(parts, keep=("truth",))
+    np.testing.assert_array_equal(joined.errors, np.arange(5.0))
+    np.testing.assert_array_equal(joined.per_filter["ekf"], np.arange(5))
+    np.testing.assert_array_equal(joined.truth, np.ones(3))
+    assert joined.name == "a"
+
+
+def test_resolve_workers_names_the_option_and_reads_local_n():
+    from oceanloc.evaluation.montecarlo import resolve_workers
+
+    assert resolve_workers(3) == 3
+    assert resolve_workers(None, "local:2") == 2
+    assert resolve_workers() >= 1
+    with pytest.raises(ConfigError, match="--workers must be at least 1"):
+        resolve_workers(0)
+    with pytest.raises(ConfigError, match="local:N needs an integer"):
+        resolve_workers(None, "local:x")

@@ -12,6 +12,7 @@ The executor comes from the caller (any :class:`concurrent.futures.Executor`, in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import os
@@ -108,9 +109,7 @@ def open_executor(scheduler: str | None = None, workers: int | None = None) -> I
         Number of local processes when ``scheduler`` is ``None``.
     """
     if scheduler is None:
-        n = workers if workers is not None else (os.cpu_count() or 1)
-        if n < 1:
-            raise ConfigError(f"--workers must be at least 1, got {n}")
+        n = resolve_workers(workers)
         if n == 1:
             yield None
             return
@@ -126,12 +125,7 @@ def _dask_executor(scheduler: str) -> Iterator[Executor]:
     except ImportError:  # pragma: no cover - distributed is a declared dependency
         raise ConfigError("--scheduler needs the 'distributed' package (pip install distributed)") from None
     if scheduler.startswith("local:"):
-        try:
-            n = int(scheduler.split(":", 1)[1])
-        except ValueError:
-            raise ConfigError(f"--scheduler local:N needs an integer N, got '{scheduler}'") from None
-        if n < 1:
-            raise ConfigError(f"--scheduler local:N needs N >= 1, got {n}")
+        n = resolve_workers(None, scheduler)
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, dashboard_address=None, processes=True)
         client = Client(cluster)
         try:
@@ -154,6 +148,54 @@ def _dask_executor(scheduler: str) -> Iterator[Executor]:
         client.close()
 
 
+def concat_runs(parts: Sequence[T], *, keep: Sequence[str] = ()) -> T:
+    """Join chunk results of one dataclass type along the run axis, in the given order.
+
+    Every array field is concatenated along axis 0, and so is every dict of arrays (key by key);
+    the fields named in ``keep`` (run-independent: the truth, a planner name) and any other non-array
+    field are taken from the first part. This is the one place chunked Monte Carlo results are joined,
+    so a result never depends on how its runs were chunked.
+    """
+    if not parts:
+        raise ConfigError("no chunk results to join (zero runs?)")
+    first = parts[0]
+    if not dataclasses.is_dataclass(first):
+        raise TypeError(f"concat_runs joins dataclass results, got {type(first).__name__}")
+    values: dict[str, Any] = {}
+    for f in dataclasses.fields(first):
+        value = getattr(first, f.name)
+        if f.name in keep:
+            values[f.name] = value
+        elif isinstance(value, np.ndarray):
+            values[f.name] = np.concatenate([getattr(p, f.name) for p in parts], axis=0)
+        elif isinstance(value, dict) and value and all(isinstance(v, np.ndarray) for v in value.values()):
+            values[f.name] = {
+                k: np.concatenate([getattr(p, f.name)[k] for p in parts], axis=0) for k in value
+            }
+        else:
+            values[f.name] = value
+    return dataclasses.replace(first, **values)
+
+
 def concat_fields(results: Sequence[Any], names: Sequence[str]) -> dict[str, np.ndarray]:
     """Concatenate the array attributes ``names`` of chunk results along the run axis."""
     return {n: np.concatenate([getattr(r, n) for r in results], axis=0) for n in names}
+
+
+def resolve_workers(workers: int | None = None, scheduler: str | None = None) -> int:
+    """How many workers a run will use: ``workers`` if given (at least 1), ``N`` of ``local:N``, else all
+    cores; the one place the default is decided (the count a remote scheduler has is known only once
+    connected, see :func:`open_executor`)."""
+    if workers is not None:
+        if workers < 1:
+            raise ConfigError(f"--workers must be at least 1, got {workers}")
+        return int(workers)
+    if scheduler is not None and scheduler.startswith("local:"):
+        try:
+            n = int(scheduler.split(":", 1)[1])
+        except ValueError:
+            raise ConfigError(f"--scheduler local:N needs an integer N, got '{scheduler}'") from None
+        if n < 1:
+            raise ConfigError(f"--scheduler local:N needs N >= 1, got {n}")
+        return n
+    return os.cpu_count() or 1

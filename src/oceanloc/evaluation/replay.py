@@ -19,7 +19,7 @@ import numpy as np
 
 from oceanloc._typing import FloatArray
 from oceanloc.evaluation.metrics import LogDetStats, log_det_stats, rmsee
-from oceanloc.evaluation.montecarlo import run_chunked
+from oceanloc.evaluation.montecarlo import concat_runs, run_chunked
 from oceanloc.field.replay import (
     RecordSet,
     ReplayRuns,
@@ -92,7 +92,7 @@ def replay_monte_carlo(
     planner_settings(planner, settings.reach_m)
     task = functools.partial(_chunk, records=records, settings=settings, planner=planner, seed=seed)
     parts = run_chunked(task, runs, executor=executor, chunk_size=chunk_size, progress=progress)
-    return summarize(ReplayRuns.concatenate(parts), records.name, seed)
+    return summarize(concat_runs(parts, keep=("planner", "reference_enu_m")), records.name, seed)
 
 
 def replay_planners(

@@ -20,7 +20,7 @@ from oceanloc._typing import FloatArray
 from oceanloc.config.survey import SurveyScenario
 from oceanloc.estimation.consistency import ChiSquareCheck, chi_square_check
 from oceanloc.evaluation.metrics import LogDetStats, log_det_stats, rmsee
-from oceanloc.evaluation.montecarlo import run_chunked
+from oceanloc.evaluation.montecarlo import concat_runs, run_chunked
 from oceanloc.sim.survey import SurveyRuns, simulate_surveys
 
 
@@ -99,11 +99,9 @@ def survey_monte_carlo(
     """Run ``runs`` independent surveys of ``scenario`` and summarize them."""
     task = functools.partial(_chunk_metrics, scenario=scenario, seed=seed)
     parts = run_chunked(task, runs, executor=executor, chunk_size=chunk_size, progress=progress)
-    errors = np.concatenate([p.errors_m for p in parts])
-    log_det = np.concatenate([p.log_det for p in parts])
-    nees = np.concatenate([p.nees for p in parts])
-    plan_time = np.concatenate([p.plan_time_s for p in parts])
-    converged = np.concatenate([p.converged for p in parts])
+    joined = concat_runs(parts)
+    errors, log_det, nees = joined.errors_m, joined.log_det, joined.nees
+    plan_time, converged = joined.plan_time_s, joined.converged
     return SurveyMonteCarlo(
         scenario=scenario,
         seed=seed,
@@ -114,7 +112,7 @@ def survey_monte_carlo(
         nees_final=chi_square_check(nees[:, -1], 3 * scenario.n_transponders),
         plan_time_s=float(plan_time.mean()) if plan_time.size else 0.0,
         converged_fraction=float(converged.mean()),
-        sites_enu_m=np.concatenate([p.sites_enu_m for p in parts]),
+        sites_enu_m=joined.sites_enu_m,
     )
 
 

@@ -31,7 +31,6 @@ Readings (the papers do not spell these out):
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -375,17 +374,6 @@ class ReplayRuns:
     @property
     def runs(self) -> int:
         return int(self.run_indices.size)
-
-    @staticmethod
-    def concatenate(parts: list[ReplayRuns]) -> ReplayRuns:
-        """Join chunks of runs (in the given order)."""
-        fixed = ("planner", "reference_enu_m")
-        fields = {
-            f.name: np.concatenate([getattr(p, f.name) for p in parts])
-            for f in dataclasses.fields(ReplayRuns)
-            if f.name not in fixed
-        }
-        return ReplayRuns(planner=parts[0].planner, reference_enu_m=parts[0].reference_enu_m, **fields)
 
 
 def replay_surveys(

@@ -20,7 +20,6 @@ out.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,16 +97,6 @@ class SurveyRuns:
     @property
     def runs(self) -> int:
         return int(self.run_indices.size)
-
-    @staticmethod
-    def concatenate(parts: list[SurveyRuns]) -> SurveyRuns:
-        """Join chunks of runs (in the given order)."""
-        fields = {
-            f.name: np.concatenate([getattr(p, f.name) for p in parts])
-            for f in dataclasses.fields(SurveyRuns)
-        }
-        fields["transponders_enu_m"] = parts[0].transponders_enu_m
-        return SurveyRuns(**fields)
 
 
 def build_planner(
