@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test test-slow bench lint install clean
+.PHONY: demo test test-slow bench lint install system clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -17,13 +17,17 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 install: $(STAMP)
 
+# System components that some tests run for real (gpsd, socat): installed where possible, else skipped.
+system:
+	@bash scripts/system-deps.sh
+
 demo: $(STAMP)
 	$(BIN)/oceanloc demo --out oceanloc-demo
 
-test: $(STAMP)
+test: $(STAMP) system
 	$(BIN)/python -m pytest -m "not slow"
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) system
 	$(BIN)/python -m pytest -m slow
 
 bench: $(STAMP)
