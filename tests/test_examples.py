@@ -93,8 +93,8 @@ def test_plan_drift_route() -> None:
     out = run_example("plan_drift_route.py")
     lattice = numbers(r"oceanloc: EXACT, flight energy NUM Wh \(direct flight NUM Wh", out)
     thesis = numbers(r"thesis-single: EXACT, flight energy NUM Wh \(direct flight NUM Wh", out)
-    # Riding the vortex beats flying straight; the lattice planner beats DR-RRT* (README: 1.01 against
-    # 1.35 times the best achievable on the thesis scenario).
+    # Riding the vortex beats flying straight; the lattice planner beats DR-RRT* (docs/dillard-aquaquad.md:
+    # 1.01 against 1.35 times the best achievable on the thesis scenario).
     assert lattice[0] < thesis[0] < thesis[1]
     assert lattice[1] == thesis[1]
     # Flight energy is that of the distance flown (IV.14): 200 W at 20 kn of 1852 m/nmi = 5.400 Wh/km.
