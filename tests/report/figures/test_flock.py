@@ -58,7 +58,7 @@ def test_lab_figures():
     assert lines["true target track"].get_zorder() > lines["UKF estimate"].get_zorder()
     assert len(lines["nodes"].get_xdata()) == 3
     tdoa = figures.lab_tdoa_figure(mc).axes[0]
-    assert tdoa.get_ylabel() == "TDOA (ms)" and "pair 3, true" in _lines(tdoa)
+    assert tdoa.get_ylabel() == "TDOA (ms)" and "nodes 2 - 3, true" in _lines(tdoa)
     residual = figures.lab_residual_hdop_figure(mc)
     assert [a.get_ylabel() for a in residual.axes] == ["position residual (m)", "HDOP (m)"]
 

@@ -21,6 +21,7 @@ from oceanloc.planning.dop import DopMap, PlacementResult, hdop_unit
 from oceanloc.report.figures._style import save_figure
 from oceanloc.reproduce.dillard_filters import DillardFiltersResult
 from oceanloc.reproduce.dillard_lab_tdoa import LabTdoaResult
+from oceanloc.sim.flock import scenario_sensor_model
 
 __all__ = [
     "correlation_figure",
@@ -56,16 +57,25 @@ def _draw_nodes(ax: Axes, mc: FilterMonteCarlo, lw: float) -> None:
 
 
 def geometry_figure(mc: FilterMonteCarlo) -> Figure:
-    """Thesis Figure 25: the nodes' drift paths (dots at their starts) and the target's track."""
-    fig = Figure(figsize=(8, 5))
-    ax = fig.add_subplot()
-    _draw_nodes(ax, mc, 2.0)
-    ax.plot(mc.truth[:, 0], mc.truth[:, 1], **_TRUTH_STYLE)
-    ax.plot(*mc.truth[0, :2], "k*", ms=10, zorder=6, label="target start")
+    """Thesis Figure 25: the nodes' drift paths (dots at their starts) and the target's track; the right
+    panel zooms on the nodes at equal scale."""
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    whole, zoom = fig.subplots(1, 2, width_ratios=[2, 1])
+    for ax in (whole, zoom):
+        _draw_nodes(ax, mc, 2.0)
+        ax.plot(mc.truth[:, 0], mc.truth[:, 1], **_TRUTH_STYLE)
+        ax.plot(*mc.truth[0, :2], "k*", ms=10, zorder=6, ls="none", label="target start")
+        ax.set(xlabel="east (m)", ylabel="north (m)")
+        ax.grid(alpha=0.3)
     n = mc.nodes_m.shape[1]
-    ax.set(xlabel="east (m)", ylabel="north (m)", title=f"{n} nodes drifting on a ring; the target's track")
-    ax.set_aspect("equal", adjustable="box")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
+    whole.set_title(f"{n} nodes drifting on a ring; the target's track")
+    nodes = mc.nodes_m.reshape(-1, 2)
+    centre = 0.5 * (nodes.min(axis=0) + nodes.max(axis=0))
+    half = 0.6 * float(np.max(nodes.max(axis=0) - nodes.min(axis=0))) or 1.0
+    zoom.set(xlim=(centre[0] - half, centre[0] + half), ylim=(centre[1] - half, centre[1] + half))
+    zoom.set_aspect("equal")
+    zoom.set_title("the nodes (equal scale)")
+    zoom.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     return fig
 
 
@@ -191,9 +201,11 @@ def lab_tdoa_figure(mc: TrackingHdopMonteCarlo) -> Figure:
     ax = fig.add_subplot()
     t = mc.times_s
     scale, unit = (1e3, "ms") if mc.noise_unit == "s" else (1.0, mc.noise_unit)
+    pairs = scenario_sensor_model(mc.scenario).pairs
     for p in range(mc.clean.shape[1]):
+        what = f"nodes {pairs[p][0] + 1} - {pairs[p][1] + 1}" if pairs is not None else f"node {p + 1}"
         ax.plot(t, mc.measured[:, p] * scale, ".", ms=1.5, alpha=0.3, color=f"C{p}")
-        ax.plot(t, mc.clean[:, p] * scale, lw=1.2, color=f"C{p}", label=f"pair {p + 1}, true")
+        ax.plot(t, mc.clean[:, p] * scale, lw=1.2, color=f"C{p}", label=f"{what}, true")
     ax.plot([], [], ".", color="0.5", label="noisy (dots)")
     name = "TDOA" if mc.scenario.kind == "tdoa" else mc.scenario.kind
     ax.set(
