@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.colors import LogNorm
+from matplotlib.colors import LogNorm, Normalize
 from matplotlib.figure import Figure
 
 from oceanloc.estimation.time_delay import RecordingDelay
@@ -239,12 +239,17 @@ def lab_figures(result: LabTdoaResult, folder: Path) -> list[Path]:
 
 
 def hdop_map_figure(dop: DopMap) -> Figure:
-    """Thesis Figure 32: HDOP as one node moves over the grid (log colour scale, singular cells blank)."""
+    """Thesis Figure 32: HDOP as one node moves over the grid (log colour scale over a decade or more,
+    singular cells blank)."""
     fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot()
     values = np.where(np.isfinite(dop.hdop), dop.hdop, np.nan)
     finite = values[np.isfinite(values)]
-    norm = LogNorm(vmin=float(finite.min()), vmax=float(np.percentile(finite, 99))) if finite.size else None
+    norm = None
+    if finite.size:
+        lo, hi = float(finite.min()), float(np.percentile(finite, 99))
+        # A log scale where the map spans a decade or more; a linear one (plain tick labels) otherwise.
+        norm = LogNorm(vmin=lo, vmax=hi) if hi > 10 * lo else Normalize(vmin=lo, vmax=hi)
     mesh = ax.pcolormesh(dop.x_m, dop.y_m, values, shading="auto", norm=norm, cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=f"HDOP ({hdop_unit(dop.kind, dop.sigma)})")
     ax.plot(
