@@ -1,5 +1,6 @@
 """Flock Monte Carlo orchestration: chunk independence, records and datasets (short scenarios)."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -64,3 +65,20 @@ def test_tracking_results_do_not_depend_on_chunking(tmp_path):
     write_netcdf(tmp_path / "t.nc", ds)
     with pytest.raises(ConfigError, match="convergence"):
         tracking_hdop_monte_carlo(sc.with_overrides(duration_s=2.0))
+
+
+def test_a_four_state_constant_velocity_scenario_runs():
+    sc = load_flock_scenario("dillard-filters")
+    f = dataclasses.replace(
+        sc.filters,
+        initial_state=sc.filters.initial_state[:4],
+        initial_cov=sc.filters.initial_cov[:4, :4],
+        process_noise=sc.filters.process_noise[:4, :4],
+        ekf_motion="constant-velocity",
+        ukf_motion="constant-velocity",
+    )
+    sc = dataclasses.replace(sc, filters=f, duration_s=1.0, runs=2)
+    mc = filter_monte_carlo(sc, filter_variants(sc))
+    assert set(mc.variants) == {"ekf", "ukf"}  # no controls when both use the same model
+    assert mc.truth.shape == (mc.times_s.size, 4) and mc.variants["ukf"].mse_per_run.shape == (2, 4)
+    assert list(mc.to_dataset()["state"].values) == ["x", "y", "u", "v"]

@@ -147,7 +147,8 @@ class _FiltersTask:
         r = len(run_indices)
         sim = simulate_scenario(sc, run_indices)
         times, nodes, model, z = sim.times_s, sim.nodes_m, sim.sensor_model, sim.measurements
-        truth = np.broadcast_to(sim.truth, (r, *sim.truth.shape[-2:]))
+        n = sc.filters.initial_state.size  # 6, or 4 for the constant-velocity model
+        truth = np.broadcast_to(sim.truth[..., :n], (r, *sim.truth.shape[-2:-1], n))
         out = FilterRunMetrics(sse={}, nees_sum={}, seconds={}, sq_err_sum={}, example={})
         for v in self.variants:
             motion = sc.filters.motion_model(v.motion, sc.dt_s)
@@ -430,7 +431,7 @@ def filter_monte_carlo(
     parts = run_chunked(task, sc.runs, executor=executor, chunk_size=size, progress=progress)
     joined = concat_runs(parts, keep=("example",))
     nodes = scenario_nodes(sc, times)
-    truth = scenario_truth(sc, times, np.random.default_rng(0), 1)
+    truth = scenario_truth(sc, times, np.random.default_rng(0), 1)[..., : sc.filters.initial_state.size]
     bound_pos = position_pcrlb(sc, times, nodes, truth)
     n_epochs = times.size
     stats = {}
@@ -489,7 +490,8 @@ class _TrackingTask:
         r = len(run_indices)
         sim = simulate_scenario(sc, run_indices)
         times, nodes, model = sim.times_s, sim.nodes_m, sim.sensor_model
-        truth = np.broadcast_to(sim.truth, (r, *sim.truth.shape[-2:]))
+        n = sc.filters.initial_state.size  # 6, or 4 for the constant-velocity model
+        truth = np.broadcast_to(sim.truth[..., :n], (r, *sim.truth.shape[-2:-1], n))
         clean = np.broadcast_to(sim.clean, (r, *sim.clean.shape[-2:]))
         z = sim.measurements
         f = sc.filters
