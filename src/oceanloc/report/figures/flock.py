@@ -68,7 +68,8 @@ def geometry_figure(mc: FilterMonteCarlo) -> Figure:
         ax.set(xlabel="east (m)", ylabel="north (m)")
         ax.grid(alpha=0.3)
     n = mc.nodes_m.shape[1]
-    whole.set_title(f"{n} nodes drifting on a ring; the target's track")
+    layout = {"ring": "drifting on a ring", "y": "in a Y", "fixed": "fixed"}[mc.scenario.nodes.layout]
+    whole.set_title(f"{n} nodes {layout}; the target's track")
     nodes = mc.nodes_m.reshape(-1, 2)
     centre = 0.5 * (nodes.min(axis=0) + nodes.max(axis=0))
     half = 0.6 * float(np.max(nodes.max(axis=0) - nodes.min(axis=0))) or 1.0
