@@ -1,6 +1,9 @@
-"""`oceanloc tdoa A.wav B.wav`."""
+"""`oceanloc tdoa A.wav B.wav` and `oceanloc tdoa --example`."""
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -9,6 +12,7 @@ import scipy.signal
 from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
+from oceanloc.io.records import file_sha256
 
 FS = 8000
 
@@ -34,10 +38,12 @@ def test_tdoa_json_shape_and_sign(tmp_path, method):
     )
     assert result.exit_code == 0, result.output
     payload = json.loads(out.read_text())
-    assert set(payload) == {"provenance", "delay_s", "delay_samples", "method", "first", "peak_ratio"}
+    assert {"provenance", "delay_s", "delay_samples", "method", "first", "peak_ratio"} <= set(payload)
     assert payload["delay_samples"] == pytest.approx(37.0, abs=0.05)
     assert payload["delay_s"] == pytest.approx(37.0 / FS, abs=1e-5)
-    assert payload["first"] == "B" and payload["method"] == method
+    assert payload["first"] == "B" and payload["method"] == method and payload["sample_rate_hz"] == FS
+    inputs = payload["provenance"]["inputs"]
+    assert [i["sha256"] for i in inputs] == [file_sha256(pa), file_sha256(pb)]
     assert png.stat().st_size > 1000
 
 
@@ -48,3 +54,24 @@ def test_tdoa_rejects_mismatched_rates(tmp_path, capsys):
     assert info.value.code == 2
     err = " ".join(capsys.readouterr().err.split())  # rich wraps long lines at the console width
     assert "different sample rates" in err and "8000 Hz" in err and "16000 Hz" in err
+
+
+def _run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "oceanloc", "tdoa", *args], capture_output=True, text=True, env=os.environ
+    )
+
+
+def test_example_through_the_installed_command(tmp_path):
+    proc = _run("--example", "--json", str(tmp_path / "e.json"))
+    assert proc.returncode == 0, proc.stderr
+    assert "hydrophone_a.wav" in proc.stderr and "hydrophone_b.wav" in proc.stdout
+    payload = json.loads((tmp_path / "e.json").read_text())
+    # The shipped pair: A hears the sweep 1.2345 ms after B (20 dB SNR, an echo in A): within 0.1 sample.
+    assert payload["delay_s"] == pytest.approx(1.2345e-3, abs=0.1 / 16000) and payload["first"] == "B"
+
+
+def test_no_files_is_a_usage_error():
+    proc = _run()
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "give two WAV files A and B, or --example" in proc.stderr

@@ -162,3 +162,25 @@ def test_placement_reports_ring_gap_and_validates():
         optimize_placement(3, "range", min_standoff_m=10, max_standoff_m=5, rng=rng)
     with pytest.raises(ConfigError, match="at least 3"):
         optimize_placement(2, "tdoa", min_standoff_m=1, max_standoff_m=5, rng=rng)
+
+
+def test_placement_bearings_are_clockwise_from_north():
+    from oceanloc.planning.dop import optimize_placement
+
+    res = optimize_placement(
+        4,
+        "range",
+        target_m=(5.0, -5.0),
+        min_standoff_m=10,
+        max_standoff_m=10,
+        starts=1,
+        rng=np.random.default_rng(1),
+    )
+    ranges, bearings = res.ranges_bearings()
+    np.testing.assert_allclose(ranges, 10.0)
+    d = res.nodes_m - res.target_m
+    np.testing.assert_allclose(d[:, 0], ranges * np.sin(bearings), atol=1e-9)  # east = r sin(bearing)
+    np.testing.assert_allclose(d[:, 1], ranges * np.cos(bearings), atol=1e-9)  # north = r cos(bearing)
+    record = res.to_record()
+    assert all(0 <= b < 360 for b in record["node_bearing_deg"])
+    assert record["bearing_convention"].startswith("degrees clockwise from north")

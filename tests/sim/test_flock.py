@@ -80,3 +80,17 @@ def test_dropouts_and_lab_truth_shapes():
     assert 0.4 < np.isnan(z).mean() < 0.6
     with pytest.raises(ConfigError, match="dt"):
         epoch_times(0.0, 1.0)
+
+
+def test_shipped_example_recordings_are_the_synthesized_ones(tmp_path):
+    from oceanloc.io.wav import example_recordings, read_wav
+    from oceanloc.sim.flock import EXAMPLE_DELAY_S, write_example_recordings
+
+    shipped = example_recordings()
+    made = write_example_recordings(tmp_path)
+    for ours, theirs in zip(made, shipped, strict=True):
+        a, b = read_wav(ours), read_wav(theirs)
+        assert a.sample_rate_hz == b.sample_rate_hz == 16000 and a.sample_format == "int16"
+        np.testing.assert_allclose(a.samples, b.samples, atol=2.0**-15)  # within one LSB
+    assert sum(p.stat().st_size for p in shipped) < 200_000
+    assert EXAMPLE_DELAY_S == 1.2345e-3

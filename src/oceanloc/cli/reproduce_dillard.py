@@ -2,109 +2,69 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
-import numpy as np
 import typer
-from rich.table import Table
 
 from oceanloc.cli import reproduce
 from oceanloc.cli._common import (
+    JsonOut,
     Scheduler,
+    Seed,
     Workers,
+    cli_provenance,
     console,
     ensure_dir,
     err_console,
+    escape,
     progress_bar,
     write_json,
 )
-from oceanloc.config.flock import load_flock_scenario
+from oceanloc.config.flock import flock_scenario_toml, load_flock_scenario
 from oceanloc.evaluation.montecarlo import open_executor
-from oceanloc.reproduce.dillard_filters import (
-    METRICS,
-    THESIS_RUN_TIME_S,
-    THESIS_TABLE_2,
-    DillardFiltersResult,
-    reproduce_dillard_filters,
-)
-from oceanloc.reproduce.dillard_lab_tdoa import (
-    THESIS_MEAN_ABS_NOISE_S,
-    THESIS_MSE_X_M2,
-    THESIS_MSE_Y_M2,
-    LabTdoaResult,
-    reproduce_dillard_lab_tdoa,
-)
-
-_ROW_NAMES = ("X (m²)", "Y (m²)", "U (m/s)²", "V (m/s)²")
+from oceanloc.io import records
+from oceanloc.reproduce.dillard_filters import reproduce_dillard_filters
+from oceanloc.reproduce.dillard_lab_tdoa import reproduce_dillard_lab_tdoa
 
 _SCENARIO_HELP = "Built-in flock scenario name or TOML file."
+NetcdfOut = Annotated[
+    Path | None, typer.Option("--netcdf", help="Write the Monte Carlo (dims filter, run, epoch) as NetCDF.")
+]
+_FIGURES_HELP = "Folder for the PNG figures"
 
 
-def _pm(mean: float, spread: float) -> str:
-    return f"{mean:.4g} ± {spread:.2g}"
-
-
-def print_table_2(res: DillardFiltersResult) -> None:
-    """Table 2 with the thesis' single-run values beside our Monte Carlo mean ± sd and paired delta ± SE."""
-    ekf, ukf = res.variants["ekf"], res.variants["ukf"]
-    table = Table(title=f"Table 2: bearing-only tracking MSE, thesis (1 run) vs oceanloc ({res.runs} runs)")
-    for col in ("state", "thesis EKF", "EKF mean ± sd", "thesis UKF", "UKF mean ± sd", "thesis Δ", "Δ ± SE"):
-        table.add_column(col, justify="right")
-    delta, se = res.paired_difference("ekf", "ukf")
-    for i, (name, key) in enumerate(zip(_ROW_NAMES, METRICS, strict=True)):
-        te, tu = THESIS_TABLE_2["ekf"][key], THESIS_TABLE_2["ukf"][key]
-        table.add_row(
-            name,
-            f"{te:.4f}",
-            _pm(ekf.mse_mean[i], ekf.mse_sd[i]),
-            f"{tu:.4f}",
-            _pm(ukf.mse_mean[i], ukf.mse_sd[i]),
-            f"{te - tu:.4f}",
-            _pm(delta[i], se[i]),
-        )
-    console.print(table)
-    stats = Table(title="Per filter: consistency, efficiency, cost")
-    for col in ("filter", "position MSE (m²)", "NEES (n=6)", "RMSE/√PCRLB", "step/track (µs)", "one run (s)"):
-        stats.add_column(col, justify="right")
-    n_steps = res.times_s.size
-    for key, v in res.variants.items():
-        thesis = f" (thesis {THESIS_RUN_TIME_S[key]:.2f})" if key in THESIS_RUN_TIME_S else ""
-        stats.add_row(
-            v.variant.label + (" [control]" if key.endswith("control") else ""),
-            f"{v.mse_mean[0] + v.mse_mean[1]:.4g}",
-            f"{v.nees_mean:.3g}",
-            f"{v.rmse_over_sqrt_pcrlb:.3g}",
-            f"{v.step_time_s * 1e6:.1f}",
-            f"{v.step_time_s * n_steps:.3g}{thesis}",
-        )
-    console.print(stats)
-    pos = delta[0] + delta[1]
-    pos_se = float(np.hypot(se[0], se[1]))
-    verdict = "below" if pos > 0 else "not below"
-    console.print(
-        f"UKF position MSE is {verdict} the EKF's: EKF - UKF = {pos:.4g} ± {pos_se:.2g} m² (paired, 1 SE)."
+def write_outputs(
+    result: Any,
+    scenario: str,
+    json_path: Path | None,
+    netcdf: Path | None,
+    figures: Path | None,
+    write_figures: Callable[[Any, Path], list[Path]],
+) -> None:
+    """JSON (``result.to_record()``), NetCDF (``result.monte_carlo.to_dataset()``) and figures, each record
+    with the provenance: the scenario's name and TOML hash, the seed and the command line."""
+    prov = cli_provenance(
+        seed=result.monte_carlo.seed, scenario=scenario, scenario_toml=flock_scenario_toml(scenario)
     )
-    if "ekf-control" in res.variants:
-        d_same, se_same = res.paired_difference("ekf-control", "ukf")
-        console.print(
-            f"With the same motion model ({res.variants['ukf'].variant.motion}) EKF - UKF = "
-            f"{d_same[0] + d_same[1]:.4g} ± {np.hypot(se_same[0], se_same[1]):.2g} m²: the gap comes from "
-            "the motion model, not from the unscented transform (alpha = "
-            f"{res.scenario.filters.ukf_alpha:g})."
-        )
+    if json_path is not None:
+        write_json(json_path, result.to_record(), prov)
+    if netcdf is not None:
+        records.write_netcdf(netcdf, result.monte_carlo.to_dataset(), prov)
+        err_console.print(f"wrote {escape(str(netcdf))}", highlight=False)
+    if figures is not None:
+        written = write_figures(result, ensure_dir(figures))
+        err_console.print(f"wrote {len(written)} figures to {escape(str(figures))}", highlight=False)
 
 
 @reproduce.app.command("dillard-filters")
 def dillard_filters(
     runs: int = typer.Option(100, "--runs", min=1, help="Monte Carlo runs."),
-    seed: int | None = typer.Option(None, "--seed", help="Master seed (default: the scenario's)."),
-    json_path: Annotated[
-        Path | None, typer.Option("--json", help="Write the Table 2 figures as JSON.")
-    ] = None,
-    figures: Annotated[
-        Path | None, typer.Option("--figures", help="Folder for the PNG figures (Figs. 25-29).")
-    ] = None,
+    seed: Seed = None,
+    json_path: JsonOut = None,
+    netcdf: NetcdfOut = None,
+    figures: Annotated[Path | None, typer.Option("--figures", help=f"{_FIGURES_HELP} (Figs. 25-29).")] = None,
     scenario: str = typer.Option("dillard-filters", "--scenario", help=_SCENARIO_HELP),
     duration: float | None = typer.Option(None, "--duration", min=0.0, help="Override the duration (s)."),
     controls: bool = typer.Option(
@@ -113,8 +73,13 @@ def dillard_filters(
     workers: Workers = None,
     scheduler: Scheduler = None,
 ) -> None:
-    """Thesis Table 2: EKF vs UKF bearing-only tracking by four drifting nodes (Chapter III.E)."""
+    """Thesis Table 2: EKF vs UKF bearing-only tracking by four drifting nodes (Chapter III.E).
+
+    With another --scenario: the same Monte Carlo and the checks that do not refer to the thesis' values.
+    """
     from oceanloc.report.figures import flock as flock_figures
+    from oceanloc.report.tables import flock as flock_tables
+    from oceanloc.report.tables.survey import checks_table
 
     sc = load_flock_scenario(scenario)
     if duration is not None:
@@ -123,49 +88,22 @@ def dillard_filters(
         res = reproduce_dillard_filters(
             sc, runs=runs, seed=seed, controls=controls, executor=executor, progress=advance
         )
-    print_table_2(res)
-    if json_path is not None:
-        write_json(json_path, res.to_json())
-    if figures is not None:
-        folder = ensure_dir(figures)
-        written = [
-            flock_figures.flock_geometry(res, folder / "fig25_geometry.png"),
-            flock_figures.estimate_vs_truth(res, "ekf", folder / "fig26_ekf_track.png"),
-            flock_figures.residuals(res, "ekf", folder / "fig27_ekf_residuals.png"),
-            flock_figures.estimate_vs_truth(res, "ukf", folder / "fig28_ukf_track.png"),
-            flock_figures.residuals(res, "ukf", folder / "fig29_ukf_residuals.png"),
-            flock_figures.rmse_vs_bound(res, folder / "rmse_vs_pcrlb.png"),
-        ]
-        err_console.print(f"wrote {len(written)} figures to {folder}")
-
-
-def print_lab(res: LabTdoaResult) -> None:
-    """The lab test's figures beside ours."""
-    table = Table(title=f"Lab TDOA UKF test (Chapter V.C): thesis (1 run) vs oceanloc ({res.runs} runs)")
-    for col in ("quantity", "thesis", "oceanloc mean ± sd", "median"):
-        table.add_column(col, justify="right")
-
-    def row(name: str, thesis: str, values: np.ndarray, scale: float = 1.0) -> None:
-        sd = float(np.std(values, ddof=1)) if values.size > 1 else 0.0
-        median = f"{float(np.median(values)) * scale:.4g}"
-        table.add_row(name, thesis, _pm(float(np.mean(values)) * scale, sd * scale), median)
-
-    row("position MSE X (m²)", f"{THESIS_MSE_X_M2}", res.mse_xy_m2[:, 0])
-    row("position MSE Y (m²)", f"{THESIS_MSE_Y_M2}", res.mse_xy_m2[:, 1])
-    row("mean |TDOA noise| (ms)", f"{THESIS_MEAN_ABS_NOISE_S * 1e3:.1f}", res.mean_abs_noise_s, 1e3)
-    row("corr(residual, HDOP), Pearson", "peaks coincide (Fig. 67)", res.pearson)
-    row("corr(residual, HDOP), Spearman", "-", res.spearman)
-    row("NIS / dof (R is half the noise)", "-", res.nis_ratio)
-    console.print(table)
+    console.print(flock_tables.table_2(res))
+    console.print(flock_tables.filter_stats_table(res))
+    console.print(checks_table(res.checks))
+    write_outputs(res, scenario, json_path, netcdf, figures, flock_figures.filter_figures)
 
 
 @reproduce.app.command("dillard-lab-tdoa")
 def dillard_lab_tdoa(
     runs: int = typer.Option(20, "--runs", min=1, help="Monte Carlo runs (random target paths)."),
-    seed: int | None = typer.Option(None, "--seed", help="Master seed (default: the scenario's)."),
-    json_path: Annotated[Path | None, typer.Option("--json", help="Write the summary as JSON.")] = None,
+    seed: Seed = None,
+    json_path: JsonOut = None,
+    netcdf: Annotated[
+        Path | None, typer.Option("--netcdf", help="Write the Monte Carlo (dims run, epoch) as NetCDF.")
+    ] = None,
     figures: Annotated[
-        Path | None, typer.Option("--figures", help="Folder for the PNG figures (Figs. 62, 63, 67).")
+        Path | None, typer.Option("--figures", help=f"{_FIGURES_HELP} (Figs. 62, 63, 67).")
     ] = None,
     scenario: str = typer.Option("dillard-lab-tdoa", "--scenario", help=_SCENARIO_HELP),
     workers: Workers = None,
@@ -173,15 +111,11 @@ def dillard_lab_tdoa(
 ) -> None:
     """Thesis lab test: TDOA UKF, three nodes in a Y, random target; residual vs HDOP (Chapter V.C)."""
     from oceanloc.report.figures import flock as flock_figures
+    from oceanloc.report.tables import flock as flock_tables
+    from oceanloc.report.tables.survey import checks_table
 
     with open_executor(scheduler, workers) as executor, progress_bar(runs, "Monte Carlo runs") as advance:
         res = reproduce_dillard_lab_tdoa(scenario, runs=runs, seed=seed, executor=executor, progress=advance)
-    print_lab(res)
-    if json_path is not None:
-        write_json(json_path, res.to_json())
-    if figures is not None:
-        folder = ensure_dir(figures)
-        flock_figures.lab_tdoa_measurements(res, folder / "fig62_tdoa.png")
-        flock_figures.lab_track(res, folder / "fig63_track.png")
-        flock_figures.lab_residual_and_hdop(res, folder / "fig67_residual_hdop.png")
-        err_console.print(f"wrote 3 figures to {folder}")
+    console.print(flock_tables.lab_table(res))
+    console.print(checks_table(res.checks))
+    write_outputs(res, scenario, json_path, netcdf, figures, flock_figures.lab_figures)

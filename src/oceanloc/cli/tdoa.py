@@ -6,25 +6,45 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.table import Table
 
 from oceanloc.cli import root
-from oceanloc.cli._common import console, err_console, progress_bar, write_json
-from oceanloc.cli.dop import parse_point
+from oceanloc.cli._common import (
+    JsonOut,
+    cli_provenance,
+    console,
+    err_console,
+    escape,
+    progress_bar,
+    write_json,
+)
+from oceanloc.cli._options import parse_floats
 from oceanloc.errors import ConfigError
-from oceanloc.estimation.time_delay import DELAY_METHODS, estimate_delay
-from oceanloc.io.wav import common_sample_rate, read_wav
+from oceanloc.estimation.time_delay import estimate_recording_delay
+from oceanloc.io.wav import example_recordings
+
+
+def _recordings(first: Path | None, second: Path | None, example: bool) -> tuple[Path, Path]:
+    """The two files given, or the shipped sample pair with ``--example`` (its paths printed)."""
+    if example:
+        first, second = example_recordings()
+        err_console.print(f"example recordings: {escape(str(first))} {escape(str(second))}", soft_wrap=True)
+    if first is None or second is None:
+        raise ConfigError("give two WAV files A and B, or --example for the sample pair")
+    return first, second
 
 
 @root.app.command("tdoa")
 def tdoa(
-    first: Annotated[Path, typer.Argument(help="Recording A (WAV).")],
-    second: Annotated[Path, typer.Argument(help="Recording B (WAV), same sample rate.")],
+    first: Annotated[Path | None, typer.Argument(help="Recording A (WAV).")] = None,
+    second: Annotated[Path | None, typer.Argument(help="Recording B (WAV), same sample rate.")] = None,
+    example: bool = typer.Option(
+        False, "--example", help="Use the sample pair shipped with oceanloc (its paths are printed)."
+    ),
     method: str = typer.Option("gcc-phat", "--method", help="xcorr or gcc-phat."),
     max_delay: float | None = typer.Option(None, "--max-delay", help="Search |delay| <= this (s)."),
     band: str | None = typer.Option(None, "--band", help="Use only this band low,high (Hz)."),
     channel: int = typer.Option(0, "--channel", min=0, help="Channel of multi-channel files."),
-    json_path: Annotated[Path | None, typer.Option("--json", help="Write the result as JSON.")] = None,
+    json_path: JsonOut = None,
     png: Annotated[
         Path | None, typer.Option("--png", help="Write the correlation figure (thesis Fig. 17).")
     ] = None,
@@ -33,50 +53,25 @@ def tdoa(
 
     Cross-correlation or GCC-PHAT with band-limited sub-sample interpolation of the peak; the peak ratio
     (main correlation peak over the largest value outside its main lobe) says how unambiguous it is.
+    Try it at once with --example (two synthetic recordings of an up-sweep, A 1.2345 ms after B).
     """
-    from oceanloc.report.figures import flock as flock_figures
+    from oceanloc.report.figures.flock import correlation_figure, save
+    from oceanloc.report.tables.flock import delay_table
 
-    if method not in DELAY_METHODS:
-        raise ConfigError(f"--method must be one of {', '.join(DELAY_METHODS)}; got '{method}'")
-    band_hz = None
-    if band is not None:
-        lo_hi = parse_point(band, "--band")
-        band_hz = (float(lo_hi[0]), float(lo_hi[1]))
+    first, second = _recordings(first, second, example)
+    band_hz = tuple(parse_floats(band, "--band", 2)) if band is not None else None
     with progress_bar(3, "reading and correlating") as advance:
-        rec_a = read_wav(first)
-        advance(1)
-        rec_b = read_wav(second)
-        advance(1)
-        rate = common_sample_rate(rec_a, rec_b)
-        est = estimate_delay(
-            rec_a.channel(channel),
-            rec_b.channel(channel),
-            rate,
-            method=method,  # type: ignore[arg-type]
+        res = estimate_recording_delay(
+            first,
+            second,
+            channel=channel,
+            method=method,  # type: ignore[arg-type]  (checked by the library)
             max_delay_s=max_delay,
-            band_hz=band_hz,
+            band_hz=band_hz,  # type: ignore[arg-type]
+            progress=advance,
         )
-        advance(1)
-    table = Table(title=f"TDOA {first.name} (A) - {second.name} (B), {method}")
-    table.add_column("quantity")
-    table.add_column("value", justify="right")
-    table.add_row("delay (s)", f"{est.delay_s:.9f}")
-    table.add_row("delay (samples)", f"{est.delay_samples:.4f}")
-    table.add_row("heard first", f"{est.first} ({first.name if est.first == 'A' else second.name})")
-    table.add_row("peak ratio", f"{est.peak_ratio:.3g}")
-    table.add_row("sample rate (Hz)", f"{rate:g}")
-    table.add_row("formats", f"{rec_a.sample_format}, {rec_b.sample_format}")
-    console.print(table)
+    console.print(delay_table(res))
     if json_path is not None:
-        write_json(
-            json_path,
-            {
-                "delay_s": est.delay_s,
-                "delay_samples": est.delay_samples,
-                "method": est.method,
-                "first": est.first,
-                "peak_ratio": est.peak_ratio,
-            },
-        )
+        write_json(json_path, res.to_record(), cli_provenance(inputs=[first, second]))
     if png is not None:
-        err_console.print(f"wrote {flock_figures.correlation_figure(est, png, (first.name, second.name))}")
+        err_console.print(f"wrote {escape(str(save(correlation_figure(res), png)))}", highlight=False)

@@ -14,7 +14,7 @@ Monte Carlo defaults. The AquaQuad thesis' scenarios ship as ``dillard-*.toml`` 
     count = 4                        # ring
     radius_m = 200.0                 # ring, y
     drift_speed_mps = 0.5            # ring: speed along the circle
-    phase_deg = 45.0                 # ring: node 0's angle; y: the first arm's heading
+    phase_deg = 45.0                 # ring: node 0's polar angle; y: the first arm's (ccw from east)
     center_m = [0.0, 0.0]
     # positions_m = [x0, y0, x1, y1, ...]   # fixed
 
@@ -62,7 +62,7 @@ from typing import Literal, TypeAlias
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.config.builtin import builtin_names, resolve_scenario
+from oceanloc.config.builtin import builtin_folder, builtin_names, resolve_scenario
 from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
 from oceanloc.models.measurements import MEASUREMENT_KINDS, MeasurementKind
@@ -169,6 +169,18 @@ def load_flock_scenario(name_or_path: str | Path) -> FlockScenario:
     """Load a built-in flock scenario by name or a scenario TOML file by path."""
     root, _ = resolve_scenario(name_or_path, "flock")
     return flock_scenario_from_table(root)
+
+
+def flock_scenario_toml(name_or_path: str | Path) -> str:
+    """The TOML text of a built-in flock scenario or a scenario file (for the provenance's hash)."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        try:
+            return path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ConfigError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    load_flock_scenario(name_or_path)  # a ConfigError listing the built-in names if there is none
+    return builtin_folder("flock").joinpath(f"{name_or_path}.toml").read_text(encoding="utf-8")
 
 
 def _nodes(t: Table) -> NodeSettings:

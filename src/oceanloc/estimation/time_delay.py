@@ -30,13 +30,16 @@ ambiguous (a periodic signal, noise only, strong multipath), large values mean o
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal, TypeAlias
+from pathlib import Path
+from typing import Any, Literal, TypeAlias
 
 import numpy as np
 
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError, DataError
+from oceanloc.io.wav import common_sample_rate, read_wav
 
 DelayMethod: TypeAlias = Literal["xcorr", "gcc-phat"]
 DELAY_METHODS: tuple[str, ...] = ("xcorr", "gcc-phat")
@@ -74,6 +77,52 @@ class DelayEstimate:
     sample_rate_hz: float
     lags_s: FloatArray
     correlation: FloatArray
+
+    def to_record(self) -> dict[str, Any]:
+        """The delay and its confidence (the correlation curve is left to the figure)."""
+        return {
+            "delay_s": float(self.delay_s),
+            "delay_samples": float(self.delay_samples),
+            "method": self.method,
+            "first": self.first,
+            "peak_ratio": float(self.peak_ratio),
+            "sample_rate_hz": float(self.sample_rate_hz),
+        }
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RecordingDelay:
+    """The delay between two WAV recordings and what was read.
+
+    Attributes
+    ----------
+    estimate : DelayEstimate
+    sources : (str, str)
+        The files A and B.
+    formats : (str, str)
+        Their stored sample formats.
+    channel : int
+        The channel correlated.
+    """
+
+    estimate: DelayEstimate
+    sources: tuple[str, str]
+    formats: tuple[str, str]
+    channel: int
+
+    @property
+    def first_source(self) -> str:
+        """The file that heard the signal first."""
+        return self.sources[0] if self.estimate.first == "A" else self.sources[1]
+
+    def to_record(self) -> dict[str, Any]:
+        return {
+            **self.estimate.to_record(),
+            "recording_a": self.sources[0],
+            "recording_b": self.sources[1],
+            "formats": list(self.formats),
+            "channel": self.channel,
+        }
 
 
 def _cross_spectrum(
@@ -208,6 +257,47 @@ def estimate_delay(
         sample_rate_hz=float(sample_rate_hz),
         lags_s=lags[show] / sample_rate_hz,
         correlation=values[show] / scale,
+    )
+
+
+def estimate_recording_delay(
+    first: str | Path,
+    second: str | Path,
+    *,
+    channel: int = 0,
+    method: DelayMethod = "gcc-phat",
+    max_delay_s: float | None = None,
+    band_hz: tuple[float, float] | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> RecordingDelay:
+    """Read two WAV files (same sample rate) and estimate the delay of ``first`` relative to ``second``.
+
+    ``progress`` is called with 1 after each file is read and after the correlation (3 in all).
+    """
+    if method not in DELAY_METHODS:
+        raise ConfigError(f"method must be one of {', '.join(DELAY_METHODS)}; got {method!r}")
+    rec_a = read_wav(first)
+    if progress:
+        progress(1)
+    rec_b = read_wav(second)
+    if progress:
+        progress(1)
+    rate = common_sample_rate(rec_a, rec_b)
+    estimate = estimate_delay(
+        rec_a.channel(channel),
+        rec_b.channel(channel),
+        rate,
+        method=method,
+        max_delay_s=max_delay_s,
+        band_hz=band_hz,
+    )
+    if progress:
+        progress(1)
+    return RecordingDelay(
+        estimate=estimate,
+        sources=(rec_a.source, rec_b.source),
+        formats=(rec_a.sample_format, rec_b.sample_format),
+        channel=channel,
     )
 
 

@@ -5,6 +5,9 @@
 floats scaled to ``[-1, 1)`` (full scale of the integer format; float files as stored), so recordings of
 different formats can be correlated directly. Unreadable files and recordings that cannot be compared
 (different sample rates) raise :class:`oceanloc.errors.DataError` naming the files.
+
+:func:`write_wav` writes 16-bit PCM; :func:`example_recordings` gives the paths of the sample pair shipped
+in ``oceanloc/data/tdoa_sweep`` (made by :func:`oceanloc.sim.flock.write_example_recordings`).
 """
 
 from __future__ import annotations
@@ -16,7 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.errors import DataError
+from oceanloc.errors import ConfigError, DataError
+
+EXAMPLE_FOLDER = "tdoa_sweep"
+EXAMPLE_FILES: tuple[str, str] = ("hydrophone_a.wav", "hydrophone_b.wav")
 
 _INT_SCALE = {np.dtype(np.int16): 2.0**15, np.dtype(np.int32): 2.0**31, np.dtype(np.int64): 2.0**63}
 
@@ -97,3 +103,26 @@ def common_sample_rate(*recordings: Recording) -> float:
             f"recordings have different sample rates ({listing}); resample them to one rate first"
         )
     return rates.pop()
+
+
+def write_wav(path: str | Path, samples: FloatArray, sample_rate_hz: int) -> Path:
+    """Write samples in ``[-1, 1]`` (clipped) as 16-bit PCM, ``(n,)`` mono or ``(n, channels)``."""
+    import scipy.io.wavfile
+
+    p = Path(path)
+    pcm = np.round(np.clip(np.asarray(samples, dtype=float), -1.0, 1.0 - 2.0**-15) * 2.0**15).astype(np.int16)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        scipy.io.wavfile.write(p, int(sample_rate_hz), pcm)
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot write WAV ({exc.strerror or exc})") from None
+    return p
+
+
+def example_recordings() -> tuple[Path, Path]:
+    """Paths of the two sample hydrophone recordings shipped with oceanloc (see their README)."""
+    from importlib import resources
+
+    folder = resources.files("oceanloc.data").joinpath(EXAMPLE_FOLDER)
+    a, b = (Path(str(folder.joinpath(name))) for name in EXAMPLE_FILES)
+    return a, b

@@ -39,6 +39,7 @@ __all__ = [
     "hdop",
     "hdop_from_jacobian",
     "hdop_map",
+    "hdop_unit",
     "optimize_placement",
     "position_jacobian",
 ]
@@ -129,6 +130,17 @@ def hdop(
     return hdop_from_jacobian(jac, sigma)
 
 
+def hdop_unit(kind: str, sigma: float) -> str:
+    """Unit of an HDOP value: ``m`` with a real sigma; with ``sigma = 1`` the geometric factor's unit
+    (``m/rad`` for bearings, ``1`` for ranges, ``m/s`` for TDOA)."""
+    if sigma != 1.0:
+        return "m"
+    return {"bearing": "m/rad", "range": "1", "tdoa": "m/s"}.get(kind, "1")
+
+
+_CF_UNITS = {"m": "m", "m/rad": "m rad-1", "1": "1", "m/s": "m s-1"}
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class DopMap:
     """HDOP over a grid of positions of one moving node, the others fixed (thesis Figures 32 and 48).
@@ -154,6 +166,36 @@ class DopMap:
     kind: str
     sigma: float
 
+    @property
+    def hdop_unit(self) -> str:
+        return hdop_unit(self.kind, self.sigma)
+
+    def minimum(self) -> tuple[float, float, float] | None:
+        """``(hdop, x_m, y_m)`` of the best cell for the moving node; ``None`` if every cell is singular."""
+        finite = np.isfinite(self.hdop)
+        if not finite.any():
+            return None
+        iy, ix = np.unravel_index(np.argmin(np.where(finite, self.hdop, np.inf)), self.hdop.shape)
+        return float(self.hdop[iy, ix]), float(self.x_m[ix]), float(self.y_m[iy])
+
+    def to_record(self) -> dict[str, Any]:
+        """Summary of the map (the grid itself goes to NetCDF through :meth:`to_dataset`)."""
+        finite = np.isfinite(self.hdop)
+        best = self.minimum()
+        return {
+            "kind": self.kind,
+            "sigma": self.sigma,
+            "hdop_unit": self.hdop_unit,
+            "target_m": self.target_m.tolist(),
+            "fixed_nodes_m": self.fixed_nodes_m.tolist(),
+            "grid_x_m": [float(self.x_m[0]), float(self.x_m[-1]), int(self.x_m.size)],
+            "grid_y_m": [float(self.y_m[0]), float(self.y_m[-1]), int(self.y_m.size)],
+            "min_hdop": None if best is None else best[0],
+            "min_hdop_node_m": None if best is None else [best[1], best[2]],
+            "median_hdop": float(np.median(self.hdop[finite])) if finite.any() else None,
+            "singular_fraction": float(1.0 - finite.mean()),
+        }
+
     def to_dataset(self) -> Any:
         """The map as an :class:`xarray.Dataset` (CF-style attributes), ready for ``to_netcdf``."""
         import xarray as xr
@@ -161,9 +203,24 @@ class DopMap:
         finite = np.where(np.isfinite(self.hdop), self.hdop, np.nan)
         return xr.Dataset(
             {
-                "hdop": (("y", "x"), finite, {"long_name": "horizontal dilution of precision", "units": "m"}),
-                "fixed_node_x": (("node",), self.fixed_nodes_m[:, 0], {"units": "m"}),
-                "fixed_node_y": (("node",), self.fixed_nodes_m[:, 1], {"units": "m"}),
+                "hdop": (
+                    ("y", "x"),
+                    finite,
+                    {
+                        "long_name": "horizontal dilution of precision",
+                        "units": _CF_UNITS[self.hdop_unit],
+                    },
+                ),
+                "fixed_node_x": (
+                    ("node",),
+                    self.fixed_nodes_m[:, 0],
+                    {"long_name": "fixed node east", "units": "m"},
+                ),
+                "fixed_node_y": (
+                    ("node",),
+                    self.fixed_nodes_m[:, 1],
+                    {"long_name": "fixed node north", "units": "m"},
+                ),
             },
             coords={
                 "x": ("x", self.x_m, {"long_name": "moving node east", "units": "m"}),
@@ -203,6 +260,7 @@ def hdop_map(
         raise ConfigError(f"fixed nodes must be (n, 2), got {fixed.shape}")
     if not resolution_m > 0:
         raise ConfigError(f"grid resolution must be positive, got {resolution_m}")
+    _check_sigma(sigma)
     for name, (lo, hi) in (("x", x_range_m), ("y", y_range_m)):
         if not hi > lo:
             raise ConfigError(f"grid {name} range must have max > min, got {lo}..{hi}")
@@ -218,6 +276,11 @@ def hdop_map(
     return DopMap(
         x_m=x, y_m=y, hdop=values, fixed_nodes_m=fixed, target_m=target, kind=kind, sigma=float(sigma)
     )
+
+
+def _check_sigma(sigma: float) -> None:
+    if not (np.isfinite(sigma) and sigma > 0):
+        raise ConfigError(f"measurement sigma must be positive, got {sigma}")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -239,6 +302,11 @@ class PlacementResult:
         HDOP reached from each start (the spread shows how much a single local solve depends on its start).
     start_nodes_m : (S, n, 2) float
         Placement reached from each start.
+    target_m : (2,) float
+    fixed_nodes_m : (k, 2) float
+        The nodes that were already in place (``k = 0`` when none).
+    kind : str
+    sigma : float
     """
 
     nodes_m: FloatArray
@@ -248,6 +316,35 @@ class PlacementResult:
     gap: float
     start_hdop: FloatArray
     start_nodes_m: FloatArray
+    target_m: FloatArray
+    fixed_nodes_m: FloatArray
+    kind: str
+    sigma: float
+
+    def ranges_bearings(self) -> tuple[FloatArray, FloatArray]:
+        """Range (m) and true bearing from the target of each placed node, radians clockwise from north
+        (the +y axis) in ``[0, 2 pi)``."""
+        d = self.nodes_m - self.target_m
+        return np.hypot(d[:, 0], d[:, 1]), np.mod(np.arctan2(d[:, 0], d[:, 1]), 2 * np.pi)
+
+    def to_record(self) -> dict[str, Any]:
+        """The placement; bearings in degrees clockwise from north, as seen from the target."""
+        ranges, bearings = self.ranges_bearings()
+        return {
+            "kind": self.kind,
+            "sigma": self.sigma,
+            "target_m": self.target_m.tolist(),
+            "fixed_nodes_m": self.fixed_nodes_m.tolist(),
+            "nodes_m": self.nodes_m.tolist(),
+            "node_range_m": ranges.tolist(),
+            "node_bearing_deg": np.degrees(bearings).tolist(),
+            "bearing_convention": "degrees clockwise from north (+y), from the target to the node",
+            "hdop": self.hdop,
+            "ring_nodes_m": self.ring_nodes_m.tolist(),
+            "ring_hdop": self.ring_hdop,
+            "ring_gap": self.gap,
+            "start_hdop": self.start_hdop.tolist(),
+        }
 
 
 def _polar_nodes(params: FloatArray, target: FloatArray) -> FloatArray:
@@ -309,6 +406,7 @@ def optimize_placement(
         raise ConfigError(f"need 0 < min stand-off <= max stand-off, got {min_standoff_m}, {max_standoff_m}")
     if starts < 1:
         raise ConfigError(f"need at least one start, got {starts}")
+    _check_sigma(sigma)
     target = np.asarray(target_m, dtype=float)
     n = n_nodes
 
@@ -363,4 +461,8 @@ def optimize_placement(
         gap=ring_hdop / float(values[best]) - 1.0,
         start_hdop=values,
         start_nodes_m=_polar_nodes(finals, target),
+        target_m=target,
+        fixed_nodes_m=fixed,
+        kind=kind,
+        sigma=float(sigma),
     )

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.config.flock import FlockScenario
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.tracking import FlockSensorModel
+from oceanloc.io.wav import EXAMPLE_FILES, write_wav
 from oceanloc.models.measurements import wrap_angle_rad
 
 
@@ -280,4 +282,62 @@ def simulate_scenario(scenario: FlockScenario, run_indices: ArrayLike) -> FlockS
         sensor_model=model,
         clean=model.measure(truth, nodes),
         measurements=simulate_measurements(model, truth, nodes, scenario.sigma_true, rngs),
+    )
+
+
+EXAMPLE_RATE_HZ = 16_000
+EXAMPLE_DELAY_S = 1.2345e-3
+"""Arrival at hydrophone A minus arrival at B in the shipped sample pair (19.752 samples at 16 kHz)."""
+
+
+def sweep_recordings(
+    *,
+    sample_rate_hz: int = EXAMPLE_RATE_HZ,
+    delay_s: float = EXAMPLE_DELAY_S,
+    duration_s: float = 0.5,
+    onset_s: float = 0.1,
+    sweep_s: float = 0.05,
+    band_hz: tuple[float, float] = (1000.0, 6000.0),
+    echo_delay_s: float = 4e-3,
+    echo_gain: float = 0.4,
+    snr_db: float = 20.0,
+    seed: int = 2014,
+) -> tuple[FloatArray, FloatArray]:
+    """Two hydrophone recordings of one up-sweep (thesis Chapter II.E.3, Figures 16-17), ``(n,)`` each.
+
+    A Hann-tapered linear sweep over ``band_hz`` arrives at B at ``onset_s`` and at A ``delay_s`` later (a
+    fractional delay applied in the frequency domain, exact for the band-limited sweep); A also hears a
+    surface echo ``echo_delay_s`` after its direct arrival, ``echo_gain`` as strong. White noise at
+    ``snr_db`` (relative to the sweep's power) from ``numpy.random.default_rng(seed)``. Peak amplitude 0.5.
+    """
+    n = round(duration_s * sample_rate_hz)
+    t = np.arange(round(sweep_s * sample_rate_hz)) / sample_rate_hz
+    f0, f1 = band_hz
+    sweep = np.sin(2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / sweep_s * t**2)) * np.hanning(t.size)
+    base = np.zeros(n)
+    start = round(onset_s * sample_rate_hz)
+    base[start : start + t.size] = sweep
+    freqs = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
+    spectrum = np.fft.rfft(base)
+
+    def shifted(delay: float) -> FloatArray:
+        return np.fft.irfft(spectrum * np.exp(-2j * np.pi * freqs * delay), n)
+
+    b = base
+    a = shifted(delay_s) + echo_gain * shifted(delay_s + echo_delay_s)
+    rng = np.random.default_rng(seed)
+    noise_sd = np.sqrt(np.mean(sweep**2) * 10 ** (-snr_db / 10))
+    a = a + noise_sd * rng.standard_normal(n)
+    b = b + noise_sd * rng.standard_normal(n)
+    scale = 0.5 / max(np.max(np.abs(a)), np.max(np.abs(b)))
+    return scale * a, scale * b
+
+
+def write_example_recordings(folder: str | Path) -> tuple[Path, Path]:
+    """Write :func:`sweep_recordings` (defaults) as the 16-bit PCM pair shipped in ``oceanloc/data``."""
+    a, b = sweep_recordings()
+    out = Path(folder)
+    return (
+        write_wav(out / EXAMPLE_FILES[0], a, EXAMPLE_RATE_HZ),
+        write_wav(out / EXAMPLE_FILES[1], b, EXAMPLE_RATE_HZ),
     )
