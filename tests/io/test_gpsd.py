@@ -12,8 +12,11 @@ import time
 import tty
 from pathlib import Path
 
+import numpy as np
 import pynmea2
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from oceanloc.errors import DataError
 from oceanloc.io.gpsd import GpsdClient, GpsdReportParser, read_gpsd_lines
@@ -271,3 +274,32 @@ def test_gpsfake_replays_a_recorded_file(tmp_path: Path):
     want = {t.timestamp(): lat for t, lat in epochs}
     assert len(fixes) >= 5
     assert all(abs(f.lat_deg - want[f.t_unix_s]) < 1e-6 for f in fixes)  # RMC carries 1e-4 arc-minutes
+
+
+JSON_VALUES = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=True) | st.text(max_size=30),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner, max_size=3),
+    max_leaves=8,
+)
+TPV_KEYS = st.sampled_from(
+    ["class", "mode", "time", "lat", "lon", "altHAE", "altMSL", "alt", "geoidSep", "heading"]
+)
+
+
+@given(
+    st.dictionaries(TPV_KEYS, JSON_VALUES, max_size=8), st.sampled_from(["TPV", "ATT", "HDG", "ERROR", None])
+)
+def test_arbitrary_reports_are_kept_or_recorded_never_raised(obj: dict, kind):
+    if kind is not None:
+        obj = {**obj, "class": kind}
+    qc = QcReport()
+    rec = GpsdReportParser().feed(1, json.dumps(obj), qc, "gpsd://x")
+    if isinstance(rec, GpsFix):
+        assert -90 <= rec.lat_deg <= 90 and -180 <= rec.lon_deg <= 180 and np.isfinite(rec.h_m)
+    assert all(str(i).startswith("gpsd://x:1: ") for i in qc.issues)
+
+
+@given(st.text(max_size=200))
+def test_arbitrary_text_is_recorded_never_raised(text: str):
+    qc = QcReport()
+    GpsdReportParser().feed(3, text, qc, "gpsd://x")

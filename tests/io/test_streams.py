@@ -9,12 +9,15 @@ import tty
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.io.lines import GpsFix, Heading, RangeRecord
 from oceanloc.io.nmea import format_gga, format_hdt, format_zda
 from oceanloc.io.streams import (
     NmeaStream,
+    RangeTextStream,
     SeatracRangeStream,
     StreamTimeoutError,
     open_position_stream,
@@ -67,6 +70,7 @@ def test_specs_parse():
     assert (s.scheme, s.path, s.baud) == ("serial", "/dev/ttyUSB0", 4800)
     s = parse_spec("seatrac:///dev/ttyUSB1?beacons=1,2&timeout=2.5")
     assert (s.path, s.beacons, s.baud, s.params["timeout"]) == ("/dev/ttyUSB1", (1, 2), 115200, "2.5")
+    assert parse_spec("serial:///dev/ttyUSB0").baud == 4800
     assert parse_spec("tcp://localhost:2947").host == "localhost"
 
 
@@ -246,3 +250,37 @@ def test_seatrac_spec_pings_the_simulated_beacons():
     for r in got:
         # The simulator reports RANGE_TIME rounded to 100 ns; at 1500 m/s that is 0.15 mm.
         assert r.status == "ok" and abs(r.range_m - truth[r.beacon]) < 2e-4
+
+
+class _Lines:
+    """A line source replaying given raw lines (for fuzzing the streams without a socket)."""
+
+    name = "fuzz://lines"
+
+    def __init__(self, lines: list[bytes]) -> None:
+        self.lines = list(lines)
+
+    def read_line(self, timeout_s: float) -> bytes | None:
+        return self.lines.pop(0) if self.lines else None
+
+    def close(self) -> None:
+        pass
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.binary(max_size=120) | st.text(max_size=120).map(str.encode), max_size=12))
+def test_arbitrary_lines_raise_nothing_and_every_issue_names_the_stream(lines: list[bytes]):
+    for stream in (NmeaStream(_Lines(lines)), RangeTextStream(_Lines(lines))):
+        while stream.read(0.0) is not None:
+            pass
+        assert all(str(i).startswith("fuzz://lines:") and "\n" not in str(i) for i in stream.qc.issues)
+
+
+def test_an_overlong_line_is_cut_and_recorded():
+    port, thread = _serve_tcp(b"$" + b"A" * 70_000 + b"\n" + (format_zda(T0) + "\r\n").encode())
+    with open_position_stream(f"tcp://{LOOPBACK}:{port}") as stream:
+        with pytest.raises(DataError, match="connection closed"):
+            stream.read(2.0)
+        assert (stream.qc.issues[0].line, stream.qc.issues[0].reason) == (1, "truncated sentence")
+        assert "line over 65536 bytes" in stream.qc.issues[0].detail
+    thread.join(2)

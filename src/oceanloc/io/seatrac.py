@@ -613,8 +613,11 @@ class SeatracPinger:
                 self.qc.add(self.port, self._lines, "bad frame", str(exc))
         return None
 
-    def ping(self, beacon_id: int) -> RangeRecord:
-        """Ping one beacon and wait (at most ``timeout_s``) for its range, error or silence."""
+    def ping(self, beacon_id: int, timeout_s: float | None = None) -> RangeRecord:
+        """Ping one beacon and wait for its range, error or silence.
+
+        The wait is at most ``timeout_s`` (default: the pinger's ``timeout_s``, and never longer).
+        """
         frame = encode_ping_send(beacon_id, self.msg_type)
         self._buffer.clear()
         try:
@@ -624,7 +627,8 @@ class SeatracPinger:
             self._serial.flush()
         except (self._serial_error, OSError) as exc:
             raise DataError(f"SeaTrac {self.port}: serial write failed ({exc})") from None
-        deadline = time.monotonic() + self.timeout_s
+        wait_s = self.timeout_s if timeout_s is None else min(max(0.0, timeout_s), self.timeout_s)
+        deadline = time.monotonic() + wait_s
         acknowledged = False
 
         def failed(status: str, message: str) -> RangeRecord:
@@ -671,7 +675,7 @@ class SeatracPinger:
                     line=self._lines,
                 )
         what = "after the send status" if acknowledged else "not even the send status"
-        return failed("no response", f"nothing within {self.timeout_s:g} s ({what})")
+        return failed("no response", f"nothing within {wait_s:g} s ({what})")
 
     def records(self, n_cycles: int | None = None) -> Iterator[RangeRecord]:
         """Ping every beacon in turn, ``n_cycles`` times round (forever if None)."""

@@ -4,7 +4,8 @@ Specs (:func:`parse_spec`)::
 
     udp://127.0.0.1:10110              NMEA 0183 (or range lines) in UDP datagrams received on that address
     tcp://127.0.0.1:10110              NMEA 0183 (or range lines) from a TCP server, one per line
-    serial:///dev/ttyUSB0?baud=4800    NMEA 0183 (or range lines) on a serial port (any pyserial URL path)
+    serial:///dev/ttyUSB0?baud=9600    NMEA 0183 (or range lines) on a serial port (any pyserial URL path;
+                                       baud 4800 by default, NMEA 0183's)
     gpsd://127.0.0.1:2947              fixes and headings from gpsd's JSON protocol (port 2947 by default)
     seatrac:///dev/ttyUSB1?beacons=1,2 ranges from a SeaTrac USBL pinging beacons 1 and 2 in turn
                                        (also ``baud``, ``timeout`` in seconds per ping, ``msg=REQ|REQU|REQX``)
@@ -72,7 +73,8 @@ class StreamSpec:
 
     @property
     def baud(self) -> int:
-        return int(self.params.get("baud", "115200"))
+        """Serial speed: as given, else 115200 for a SeaTrac (its default) and 4800 for NMEA 0183."""
+        return int(self.params.get("baud", "115200" if self.scheme == "seatrac" else "4800"))
 
     @property
     def beacons(self) -> tuple[int, ...]:
@@ -211,13 +213,13 @@ class SeatracRangeStream:
         self._next = 0
 
     def read(self, timeout_s: float) -> RangeRecord:
-        """Ping the next beacon; returns its record (failed pings too) within the pinger's own timeout.
+        """Ping the next beacon; its record (failed pings too) within ``timeout_s`` or the spec's ``timeout``.
 
-        ``timeout_s`` is not used: one ping's wait is bounded by the spec's ``timeout`` (default 3 s).
+        A ping always ends with a record: ``no response`` when the beacon stayed silent.
         """
         beacon = self.pinger.beacons[self._next % len(self.pinger.beacons)]
         self._next += 1
-        return self.pinger.ping(beacon)
+        return self.pinger.ping(beacon, timeout_s)
 
     def records(self, idle_timeout_s: float) -> Iterator[RangeRecord]:
         """Every ping's record; :class:`StreamTimeoutError` when no ping succeeded for ``idle_timeout_s``."""

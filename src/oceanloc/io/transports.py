@@ -3,7 +3,7 @@
 Each has ``read_line(timeout_s) -> bytes | None`` (None when no whole line arrived in time) and
 ``close()``, and raises only :class:`~oceanloc.errors.DataError` (cannot open, receive failed, the other
 end closed). A line longer than :data:`MAX_LINE_BYTES` is cut there and returned as is, for the caller
-to record (NMEA sentences are at most 82 characters).
+to record (NMEA sentences are at most 82 characters, gpsd's JSON reports a few kilobytes).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from oceanloc.errors import DataError
 from oceanloc.io.lines import decode_line
 from oceanloc.io.qc import QcReport
 
-MAX_LINE_BYTES = 4096
+MAX_LINE_BYTES = 65536
 """A line longer than this is cut (and then recorded as truncated by the stream reading it)."""
 
 
