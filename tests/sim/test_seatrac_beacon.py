@@ -70,6 +70,13 @@ def test_ranges_dropouts_and_unknown_beacons_end_to_end():
         assert rec.azimuth_deg is not None and 0.0 <= rec.azimuth_deg < 360.0
         assert -90.0 <= rec.elevation_deg < 0.0  # transponders below the head
     assert all(r.status == "timeout" for r in records[2::3])  # beacon 3 has no transponder
+    assert sim.pings[2].to_record() == {
+        "t_mono_s": sim.pings[2].t_mono_s,
+        "beacon": 3,
+        "outcome": "dropout",
+        "true_range_m": None,
+        "reported_range_m": None,
+    }
     errors = np.asarray(by_outcome["ok"])
     n = errors.size
     assert n >= 60

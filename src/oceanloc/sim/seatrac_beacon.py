@@ -127,6 +127,15 @@ class SimulatedPing:
     true_range_m: float | None = None
     reported_range_m: float | None = None
 
+    def to_record(self) -> dict:
+        return {
+            "t_mono_s": self.t_mono_s,
+            "beacon": self.beacon,
+            "outcome": self.outcome,
+            "true_range_m": self.true_range_m,
+            "reported_range_m": self.reported_range_m,
+        }
+
 
 class SeatracBeaconSimulator:
     """A simulated SeaTrac head and its transponders on a pseudo-terminal (a context manager).
