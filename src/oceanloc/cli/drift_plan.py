@@ -11,11 +11,11 @@ from rich.table import Table
 
 from oceanloc.cli import root
 from oceanloc.cli._common import console, ensure_dir, err_console
-from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario, problem_from_scenario
+from oceanloc.config.drift import load_drift_scenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
 from oceanloc.io.paths import write_path_csv, write_path_geojson
-from oceanloc.planning.drift_rrt.planner import make_planner
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner, parse_planner_name
 from oceanloc.planning.drift_rrt.problem import PlanBudget
 from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
 
@@ -36,7 +36,7 @@ def drift_plan(
         ..., "--scenario", help="Drift scenario file or built-in name (dillard-drift-*)."
     ),
     planner: str | None = typer.Option(
-        None, "--planner", help=f"One of {', '.join(DRIFT_PLANNERS)} (default: the scenario's)."
+        None, "--planner", help=f"One of {', '.join(PLANNER_NAMES)} (default: the scenario's)."
     ),
     seed: int | None = typer.Option(None, "--seed", min=0, help="Planner seed (default: the scenario's)."),
     iterations: int | None = typer.Option(
@@ -53,9 +53,7 @@ def drift_plan(
     from oceanloc.report.figures.drift import paths_figure, tree_figure
 
     sc = load_drift_scenario(scenario)
-    name = planner or sc.planner
-    if name not in DRIFT_PLANNERS:
-        raise ConfigError(f"--planner must be one of {', '.join(DRIFT_PLANNERS)}; got '{name}'")
+    name = sc.planner if planner is None else parse_planner_name(planner, "--planner")
     problem = problem_from_scenario(sc)
     rng = np.random.default_rng(sc.seed if seed is None else seed)
     if name.startswith("thesis"):

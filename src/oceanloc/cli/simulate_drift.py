@@ -20,18 +20,16 @@ from oceanloc.cli._common import (
     progress_bar,
     write_json,
 )
-from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario, problem_from_scenario
+from oceanloc.config.drift import load_drift_scenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor, run_chunked
-from oceanloc.planning.drift_rrt.planner import make_planner
+from oceanloc.planning.drift_rrt.planner import make_planner, parse_planner_name
 from oceanloc.sim.drifters import swap_positions
 from oceanloc.sim.path_following import FollowingTask, follow_plans, merge_following, summarize_following
 
 
 def _planner(name: str | None, default: str):
-    name = name or default
-    if name not in DRIFT_PLANNERS:
-        raise ConfigError(f"--planner must be one of {', '.join(DRIFT_PLANNERS)}; got '{name}'")
+    name = default if name is None else parse_planner_name(name, "--planner")
     return name, make_planner(name)
 
 

@@ -86,16 +86,13 @@ from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
 from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.planning.drift_rrt.objective import HdopTerm
-from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, DriftPlannerName
 from oceanloc.planning.drift_rrt.problem import DriftProblem
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.units import DEG
 
 CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
-DRIFT_PLANNERS: tuple[str, ...] = PLANNER_NAMES
-"""``thesis-single``: DR-RRT* stopping at its first solution; ``thesis-optimality-seeking``: DR-RRT* over
-25,000 iterations keeping the cheapest solution; ``oceanloc``: the drift/hop lattice planner."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -162,7 +159,7 @@ class DriftScenario:
         Other flock members for the HDOP term.
     hdop_target_m : (2,) float or None
     planner : str
-        Default planner (one of :data:`DRIFT_PLANNERS`).
+        Default planner (one of :data:`~oceanloc.planning.drift_rrt.planner.PLANNER_NAMES`).
     seed : int
         Default planner seed.
     time_weight_wh_per_h : float
@@ -188,7 +185,7 @@ class DriftScenario:
     max_leg_m: float | None = None
     hdop_others_m: np.ndarray | None = None
     hdop_target_m: np.ndarray | None = None
-    planner: str = "oceanloc"
+    planner: DriftPlannerName = "oceanloc"
     seed: int = 1
     time_weight_wh_per_h: float = 0.0
     following: FollowingSettings = field(default_factory=FollowingSettings)
@@ -359,7 +356,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     hdop_t.check_unknown()
 
     plan_t = root.table("planner", required=False)
-    planner = plan_t.str("kind", "oceanloc", choices=DRIFT_PLANNERS)
+    planner = plan_t.str("kind", "oceanloc", choices=PLANNER_NAMES)
     seed = plan_t.int("seed", 1, lo=0)
     time_weight = plan_t.float("time_weight_wh_per_h", 0.0, lo=0.0)
     plan_t.check_unknown()
@@ -398,7 +395,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         max_leg_m=energy.max_hop_m if legs == "hop" else None,
         hdop_others_m=others,
         hdop_target_m=target,
-        planner=planner,
+        planner=planner,  # type: ignore[arg-type]
         seed=seed,
         time_weight_wh_per_h=time_weight,
         following=following,

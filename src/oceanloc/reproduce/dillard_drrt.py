@@ -29,7 +29,7 @@ from oceanloc.evaluation.montecarlo import concat_fields, run_chunked
 from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem
 from oceanloc.planning.drift_rrt.reference import REFERENCE_OPTIONS, best_achievable
 from oceanloc.planning.drift_rrt.space import DriftSpace
 
@@ -231,7 +231,7 @@ class DillardReport:
         Reference energy of each random field.
     convention : str
         Unit convention of every energy.
-    reference : PlanResult
+    reference : DriftPlanResult
         The reference plan on the fixed field.
     """
 
@@ -242,7 +242,7 @@ class DillardReport:
     fields: dict[str, FieldsSummary]
     field_best_wh: FloatArray
     convention: str
-    reference: PlanResult
+    reference: DriftPlanResult
     reference_options: LatticeOptions
 
     def as_json(self) -> dict:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem
 from oceanloc.sim.path_following import Replanner
 
 
@@ -25,13 +25,13 @@ class SwapResult:
     ----------
     problems : tuple of DriftProblem
         Drifter 1 (start -> goal) and drifter 2 (goal -> start).
-    results : tuple of PlanResult
+    results : tuple of DriftPlanResult
     min_separation_m : float
         Closest approach of the two planned schedules (``inf`` if a plan failed).
     """
 
     problems: tuple[DriftProblem, DriftProblem]
-    results: tuple[PlanResult, PlanResult]
+    results: tuple[DriftPlanResult, DriftPlanResult]
     min_separation_m: float
 
 

@@ -26,9 +26,9 @@ from oceanloc.config.drift import FollowingSettings
 from oceanloc.models.currents import CurrentField, Scalar
 from oceanloc.models.drift import step_function
 from oceanloc.models.paths import DriftPath
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem
 
-Replanner = Callable[[DriftProblem, np.random.Generator], PlanResult]
+Replanner = Callable[[DriftProblem, np.random.Generator], DriftPlanResult]
 
 
 @dataclass(frozen=True, slots=True)
@@ -128,7 +128,7 @@ def follow_plans(
     rngs : list of numpy.random.Generator
         One per run: its noise current and its replans.
     replanner : callable
-        ``replanner(problem_from_here, rng) -> PlanResult``.
+        ``replanner(problem_from_here, rng) -> DriftPlanResult``.
     keep_tracks : int
         Keep the tracks of this many first runs.
     max_duration_s : float, optional

@@ -2,7 +2,7 @@
 
 A :class:`DriftProblem` bundles the space (bounds, obstacles), the propagator (current field and
 integrator), start, goal disk, the vehicle's energy budget (flight speed, power, longest hop) and the
-optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> PlanResult``.
+optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> DriftPlanResult``.
 """
 
 from __future__ import annotations
@@ -147,7 +147,7 @@ class SearchTree:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class PlanResult:
+class DriftPlanResult:
     """What a planner returns.
 
     Attributes
