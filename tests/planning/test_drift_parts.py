@@ -130,7 +130,7 @@ def test_one_planner_name_parser_for_files_commands_and_the_factory():
 
     assert parse_planner_name(" OceanLoc ") == "oceanloc"
     assert PLANNER_NAMES == ("thesis-single", "thesis-optimality-seeking", "oceanloc")
-    with pytest.raises(ConfigError, match="--planner must be one of thesis-single, .*got 'rrt'"):
+    with pytest.raises(ConfigError, match=r"--planner must be one of thesis-single, .*got 'rrt'"):
         parse_planner_name("rrt", "--planner")
     with pytest.raises(ConfigError, match="planner must be one of"):
         make_planner("rrt")

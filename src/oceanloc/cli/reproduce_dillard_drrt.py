@@ -10,7 +10,15 @@ from rich.table import Table
 
 from oceanloc._random import run_generators
 from oceanloc.cli import reproduce
-from oceanloc.cli._common import Scheduler, Workers, console, ensure_dir, err_console, write_json
+from oceanloc.cli._common import (
+    Scheduler,
+    Workers,
+    console,
+    ensure_dir,
+    err_console,
+    progress_bar,
+    write_json,
+)
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
@@ -20,6 +28,7 @@ from oceanloc.reproduce.dillard_drrt import (
     THESIS_DIRECT_FLIGHT_WH,
     THESIS_TABLE4,
     DillardReport,
+    planned_runs,
     reference_options_note,
     reproduce_dillard_drrt,
     thesis_problem,
@@ -37,7 +46,6 @@ def dillard_drrt(
     fields: int = typer.Option(
         20, "--fields", min=0, help="Random obstacle fields (the thesis' generator); 0 skips."
     ),
-    field_runs: int = typer.Option(10, "--field-runs", min=1, help="Runs per planner and random field."),
     iterations: int = typer.Option(
         25_000, "--iterations", min=1, help="Iterations of the optimality-seeking mode."
     ),
@@ -52,27 +60,21 @@ def dillard_drrt(
     Compute times are wall-clock per run inside its worker; with several workers sharing the cores they
     run longer than alone (use --workers 1, or make bench, for timings).
     """
-    state: dict[str, object] = {}
-
-    def progress(stage: str, done: int, total: int) -> None:
-        if state.get("stage") != stage:
-            state["stage"] = stage
-            err_console.print(f"[dim]{stage}: {total} ...[/dim]")
-
-    with open_executor(scheduler, workers) as executor:
+    total = planned_runs(runs, fields)
+    with open_executor(scheduler, workers) as executor, progress_bar(total, "planner runs") as advance:
         report = reproduce_dillard_drrt(
             runs,
             seed,
             fields=fields,
-            field_runs=field_runs,
             iterations=iterations,
             reference_spacing_m=reference_spacing,
             executor=executor,
-            progress=progress,
+            progress=advance,
+            note=lambda text: err_console.print(text, highlight=False),
         )
     _print_report(report, runs, iterations)
     if json_path is not None:
-        write_json(json_path, report.as_json())
+        write_json(json_path, report.to_record())
     if figures is not None:
         _figures(ensure_dir(figures), report, seed, iterations)
 
@@ -184,7 +186,7 @@ def _figures(folder: Path, report: DillardReport, seed: int, iterations: int) ->
             "Final paths",
         )
     )
-    energies = {name: report.runs[name].energy_wh for name in PLANNER_NAMES}
+    energies = {name: report.fixed.runs[name].energy_wh for name in PLANNER_NAMES}
     written.append(
         energy_figure(
             folder / "drrt_energy.png",

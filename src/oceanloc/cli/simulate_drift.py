@@ -9,7 +9,6 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from oceanloc._random import run_generators
 from oceanloc.cli import simulate
 from oceanloc.cli._common import (
     Scheduler,
@@ -20,12 +19,10 @@ from oceanloc.cli._common import (
     progress_bar,
     write_json,
 )
-from oceanloc.config.drift import load_drift_scenario, problem_from_scenario
-from oceanloc.errors import ConfigError
-from oceanloc.evaluation.montecarlo import open_executor, run_chunked
+from oceanloc.config.drift import load_drift_scenario
+from oceanloc.evaluation.montecarlo import open_executor
+from oceanloc.evaluation.path_following import drift_follow_study, drift_swap_study
 from oceanloc.planning.drift_rrt.planner import make_planner, parse_planner_name
-from oceanloc.sim.drifters import swap_positions
-from oceanloc.sim.path_following import FollowingTask, follow_plans, merge_following, summarize_following
 
 
 def _planner(name: str | None, default: str):
@@ -54,18 +51,11 @@ def drift_follow(
     from oceanloc.report.figures.drift import following_figure
 
     sc = load_drift_scenario(scenario)
-    name, plan_fn = _planner(planner, sc.planner)
-    problem = problem_from_scenario(sc)
     fs = sc.following
     n = runs or fs.runs
-    s = fs.seed if seed is None else seed
-    first = plan_fn(problem, np.random.default_rng(sc.seed))
-    if first.path is None or not first.success:
-        raise ConfigError(f"{scenario}: the {name} planner found no plan to follow ({first.message})")
-    task = FollowingTask(problem, first.path, fs, plan_fn, s, keep_tracks=5)
-    with open_executor(scheduler, workers) as executor, progress_bar(n, "following") as advance:
-        res = merge_following(run_chunked(task, n, executor=executor, progress=advance))
-    summary = summarize_following(res)
+    with open_executor(scheduler, workers) as executor, progress_bar(n, "following runs") as advance:
+        study = drift_follow_study(sc, n, seed, planner=planner, executor=executor, progress=advance)
+    summary, problem, name, first, res = study.summary, study.problem, study.planner, study.plan, study.runs
     table = Table(title=f"Path following: {sc.name}, {name}, {n} runs (thesis V.D)", show_header=False)
     table.add_row(
         "true current",
@@ -94,8 +84,8 @@ def drift_follow(
             ensure_dir(figures) / f"{sc.name}-following.png",
             problem,
             first.path,
-            res.tracks,
-            res.flights,
+            res.tracks(),
+            res.flights(),
             fs.watch_circle_m,
             f"Path following, {sc.name} (thesis Fig. 72)",
         )
@@ -115,11 +105,8 @@ def drift_swap(
     from oceanloc.report.figures.drift import following_figure, paths_figure
 
     sc = load_drift_scenario(scenario)
-    name, plan_fn = _planner(planner, sc.planner)
-    problem = problem_from_scenario(sc)
-    s = sc.seed if seed is None else seed
-    rngs = run_generators(s, [0, 1])
-    swap = swap_positions(problem, plan_fn, (rngs[0], rngs[1]))
+    study = drift_swap_study(sc, seed, planner=planner)
+    swap, name, problem = study.swap, study.planner, study.swap.problems[0]
     table = Table(title=f"Position swap: {sc.name}, {name}")
     for col in (
         "drifter",
@@ -133,15 +120,11 @@ def drift_swap(
         "replans",
     ):
         table.add_column(col)
-    follow_rngs = run_generators(sc.following.seed if seed is None else seed, [0, 1])
-    followed = []
-    for k, (prob, res) in enumerate(zip(swap.problems, swap.results, strict=True)):
-        if res.path is None:
+    followed = study.followed
+    for k, (res, f) in enumerate(zip(swap.results, followed, strict=True)):
+        if res.path is None or f is None:
             table.add_row(str(k + 1), res.status.value, "-", "-", "-", "-", "-", "-", "-")
-            followed.append(None)
             continue
-        f = follow_plans(prob, res.path, sc.following, [follow_rngs[k]], plan_fn, keep_tracks=1)
-        followed.append(f)
         table.add_row(
             str(k + 1),
             res.status.value,
@@ -175,8 +158,8 @@ def drift_swap(
                 folder / f"{sc.name}-drifter{k + 1}-following.png",
                 prob,
                 res.path,
-                f.tracks,
-                f.flights,
+                f.tracks(),
+                f.flights(),
                 sc.following.watch_circle_m,
                 f"Drifter {k + 1} following its plan (thesis Fig. 72)",
             )
