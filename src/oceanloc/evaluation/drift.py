@@ -4,7 +4,8 @@
 (or a chosen subset) over ``runs`` runs; run ``r`` of every planner plans problem ``r % len(problems)`` with
 generator ``(seed, r)``, so the numbers do not depend on chunks, workers or the planner order. Chunks join
 with :func:`~oceanloc.evaluation.montecarlo.concat_runs`. :func:`summarize` gives Table 4's statistics of
-one planner; :func:`summarize_fields` the same across several obstacle fields.
+one planner; :func:`summarize_fields` the same across several obstacle fields. :func:`plan_scenario` is
+one planner run on a scenario file (``oceanloc drift-plan``).
 """
 
 from __future__ import annotations
@@ -18,15 +19,18 @@ import numpy as np
 
 from oceanloc._random import run_generators
 from oceanloc._typing import BoolArray, FloatArray, IntArray
+from oceanloc.config.drift import DriftScenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import concat_runs, run_chunked
+from oceanloc.models.paths import PathEnergy
 from oceanloc.planning.drift_rrt.planner import (
     PLANNER_NAMES,
     DriftPlannerName,
     make_planner,
     parse_planner_name,
 )
-from oceanloc.planning.drift_rrt.problem import DriftProblem
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget
+from oceanloc.planning.drift_rrt.thesis import ThesisMode, ThesisOptions, plan_thesis
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -36,7 +40,9 @@ __all__ = [
     "FieldsSummary",
     "PlannerRuns",
     "PlannerSummary",
+    "ScenarioPlan",
     "drift_monte_carlo",
+    "plan_scenario",
     "run_planner",
     "summarize",
     "summarize_fields",
@@ -291,4 +297,84 @@ def summarize_fields(res: PlannerRuns, direct_wh: FloatArray, best_wh: FloatArra
         saving_min_field=float(np.min(savings)) if savings else float("nan"),
         ratio_to_best_mean=float(np.mean(ratios)) if ratios else float("nan"),
         compute_s_median=float(np.median(res.compute_s)),
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ScenarioPlan:
+    """One planner run on a drift scenario (``oceanloc drift-plan``).
+
+    Attributes
+    ----------
+    scenario : DriftScenario
+    planner : str
+    seed : int
+    problem : DriftProblem
+    result : DriftPlanResult
+        The plan; DR-RRT* planners keep their search tree (for the figure).
+    energy : PathEnergy or None
+        Energy account of the plan (IV.14), ``None`` when no path was found.
+    """
+
+    scenario: DriftScenario
+    planner: DriftPlannerName
+    seed: int
+    problem: DriftProblem
+    result: DriftPlanResult
+    energy: PathEnergy | None
+
+    def summary(self) -> dict[str, Any]:
+        """Scenario, planner, status, flight energy (Wh) and unit convention (GeoJSON properties)."""
+        return {
+            "scenario": self.scenario.name,
+            "planner": self.planner,
+            "status": self.result.status.value,
+            "flight_energy_wh": self.result.flight_energy_wh if self.result.path is not None else None,
+            "units": self.problem.energy.convention,
+        }
+
+    def to_record(self) -> dict[str, Any]:
+        """Scenario, planner, seed, the route, the plan's outcome and its energy account (Wh, s)."""
+        return {
+            "scenario": self.scenario.name,
+            "planner": self.planner,
+            "seed": self.seed,
+            "currents": self.scenario.currents_description,
+            "start_m": self.problem.start_m.tolist(),
+            "goal_m": self.problem.goal_m.tolist(),
+            "goal_tolerance_m": self.problem.goal_tolerance_m,
+            "convention": self.problem.energy.convention,
+            "result": self.result.to_record(),
+            "energy": None if self.energy is None else self.energy.to_record(),
+        }
+
+
+def plan_scenario(
+    scenario: DriftScenario,
+    planner: str | None = None,
+    seed: int | None = None,
+    *,
+    iterations: int | None = None,
+) -> ScenarioPlan:
+    """Plan ``scenario``'s route with ``planner`` (default: the scenario's) from generator
+    ``default_rng(seed)`` (default: the scenario's seed); ``iterations`` bounds the DR-RRT* planners.
+
+    The DR-RRT* planners need the scenario's ``[hdop]`` table (their cost has an HDOP term); without it
+    this is a ConfigError.
+    """
+    name = scenario.planner if planner is None else parse_planner_name(planner, "--planner")
+    problem = problem_from_scenario(scenario)
+    s = scenario.seed if seed is None else seed
+    rng = np.random.default_rng(s)
+    if name == "oceanloc":
+        result = make_planner(name)(problem, rng)
+    else:
+        if problem.hdop is None:
+            raise ConfigError(f"{scenario.name}: the DR-RRT* planners need an [hdop] table (flock geometry)")
+        mode: ThesisMode = "single" if name == "thesis-single" else "optimality-seeking"
+        budget = PlanBudget(max_iterations=iterations) if iterations else None
+        result = plan_thesis(problem, rng, budget, ThesisOptions(mode=mode, keep_tree=True))
+    energy = None if result.path is None else result.path.energy(problem.energy)
+    return ScenarioPlan(
+        scenario=scenario, planner=name, seed=s, problem=problem, result=result, energy=energy
     )

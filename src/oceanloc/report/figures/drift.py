@@ -14,9 +14,12 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon, Rectangle
 
 from oceanloc._typing import FloatArray
+from oceanloc.evaluation.drift import ScenarioPlan
+from oceanloc.evaluation.path_following import FollowingStudy, SwapStudy
 from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree
 from oceanloc.report.figures._style import save_figure
+from oceanloc.reproduce.dillard_drrt import DillardReport, DillardSamplePlans
 
 PATH_COLOURS = {
     "thesis-single": "tab:orange",
@@ -142,6 +145,13 @@ def paths_figure(path: Path, problem: DriftProblem, plans: Mapping[str, DriftPat
     return save_figure(fig, path)
 
 
+def swap_figure(
+    path: Path, problems: Sequence[DriftProblem], plans: Mapping[str, DriftPath], title: str
+) -> Path:
+    """Thesis Figs. 70-71: each drifter's plan in its own colour, with each drifter's start and goal."""
+    return paths_figure(path, problems[0], plans, title)
+
+
 def energy_figure(
     path: Path, energies: Mapping[str, FloatArray], direct_wh: float, best_wh: float, title: str
 ) -> Path:
@@ -195,3 +205,102 @@ def following_figure(
     ax.set_title(title)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, fontsize=8)
     return save_figure(fig, path)
+
+
+def plan_figure(path: Path, plan: ScenarioPlan) -> Path:
+    """``oceanloc drift-plan``: the DR-RRT* tree and path, or the lattice planner's path, over the map."""
+    title = f"{plan.scenario.name}: {plan.planner}"
+    res = plan.result
+    if res.tree is not None:
+        return tree_figure(path, plan.problem, res.tree, res.path, title)
+    return paths_figure(path, plan.problem, {plan.planner: res.path} if res.path is not None else {}, title)
+
+
+def following_study_figure(folder: Path, study: FollowingStudy) -> Path:
+    """``oceanloc simulate drift-follow``: the plan, its watch circles and the first followed tracks."""
+    return following_figure(
+        folder / f"{study.scenario}-following.png",
+        study.problem,
+        study.plan.path,  # type: ignore[arg-type]
+        study.runs.tracks(),
+        study.runs.flights(),
+        study.settings.watch_circle_m,
+        f"Path following, {study.scenario} (thesis Fig. 72)",
+    )
+
+
+def swap_figures(folder: Path, study: SwapStudy) -> list[Path]:
+    """``oceanloc simulate drift-swap``: both plans in one figure, then each drifter following its plan."""
+    plans = {f"drifter {k + 1}": r.path for k, r in enumerate(study.swap.results) if r.path is not None}
+    written = [
+        swap_figure(
+            folder / f"{study.scenario}-plans.png",
+            study.swap.problems,
+            plans,
+            "Two drifters swap positions (thesis Figs. 70-71)",
+        )
+    ]
+    for k, (prob, res, f) in enumerate(
+        zip(study.swap.problems, study.swap.results, study.followed, strict=True)
+    ):
+        if res.path is None or f is None:
+            continue
+        written.append(
+            following_figure(
+                folder / f"{study.scenario}-drifter{k + 1}-following.png",
+                prob,
+                res.path,
+                f.tracks(),
+                f.flights(),
+                study.settings.watch_circle_m,
+                f"Drifter {k + 1} following its plan (thesis Fig. 72)",
+            )
+        )
+    return written
+
+
+def dillard_drrt_figures(folder: Path, report: DillardReport, sample: DillardSamplePlans) -> list[Path]:
+    """``oceanloc reproduce dillard-drrt --figures``: both DR-RRT* trees, the final paths of every planner
+    and the best achievable, and the flight energy of every run."""
+    problem = sample.problem
+    written = [
+        tree_figure(
+            folder / "drrt_tree_single.png",
+            problem,
+            sample.single.tree,  # type: ignore[arg-type]
+            sample.single.path,
+            "DR-RRT* single solution (thesis Figs. 46, 50)",
+        ),
+        tree_figure(
+            folder / "drrt_tree_optimality.png",
+            problem,
+            sample.optimality_seeking.tree,  # type: ignore[arg-type]
+            sample.optimality_seeking.path,
+            f"DR-RRT* optimality-seeking, {sample.iterations} iterations",
+        ),
+    ]
+    plans = {
+        "thesis-single": sample.single.path,
+        "thesis-optimality-seeking": sample.optimality_seeking.path,
+        "oceanloc": sample.oceanloc.path,
+        "best achievable": report.reference.path,
+    }
+    written.append(
+        paths_figure(
+            folder / "drrt_paths.png",
+            problem,
+            {k: v for k, v in plans.items() if v is not None},
+            "Final paths on the fixed field",
+        )
+    )
+    energies = {name: r.energy_wh for name, r in report.fixed.runs.items()}
+    written.append(
+        energy_figure(
+            folder / "drrt_energy.png",
+            energies,
+            report.direct_flight_wh,
+            report.best_achievable_wh,
+            "Flight energy per run (thesis Figs. 51, 53)",
+        )
+    )
+    return written
