@@ -42,6 +42,10 @@ def _pct(x: float) -> str:
     return "-" if not math.isfinite(x) else f"{100 * x:.1f}"
 
 
+def _ratio(x: float) -> str:
+    return f"{x:.3f}" if math.isfinite(x) else "-"
+
+
 def _pm(mean: float, std: float) -> str:
     """``mean +- std`` with two decimals; ``-`` for a missing value (a std of fewer than two runs)."""
     if not math.isfinite(mean):
@@ -164,7 +168,7 @@ def dillard_table(report: DillardReport) -> Table:
             _pm(s.energy_wh_mean, s.energy_wh_std),
             _pct(s.saving_mean),
             f"{1e3 * s.compute_s_median:.1f}",
-            f"{s.ratio_to_best:.3f}" if math.isfinite(s.ratio_to_best) else "-",
+            _ratio(s.ratio_to_best),
             end_section=t is None and name != names[-1],
         )
         if t is not None:
@@ -220,7 +224,7 @@ def dillard_fields_table(report: DillardReport) -> Table | None:
             _pct(s.success_rate),
             _pct(s.saving_mean),
             _pct(s.saving_min_field),
-            f"{s.ratio_to_best_mean:.3f}",
+            _ratio(s.ratio_to_best_mean),
             f"{1e3 * s.compute_s_median:.1f}",
         )
     return table
