@@ -184,3 +184,5 @@ def test_a_scenario_name_with_markup_is_printed_as_written(tmp_path):
     result = runner.invoke(app, ["drift-plan", "--scenario", str(text), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "odd[/x]: oceanloc" in result.output
+    # The file names stay in the output folder.
+    assert (tmp_path / "odd__x_-oceanloc.png").exists() and not (tmp_path / "odd[").exists()

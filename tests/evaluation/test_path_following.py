@@ -62,4 +62,6 @@ def test_swap_study_plans_and_follows_both_drifters():
     assert all(f is not None and f.runs == 1 for f in study.followed)
     rec = study.to_record()
     assert [d["drifter"] for d in rec["drifters"]] == [1, 2]
+    swap_rec = study.swap.to_record()
+    assert swap_rec["drifters"][1]["start_m"] == swap_rec["drifters"][0]["goal_m"]
     assert rec["min_separation_m"] >= 0.0 and "followed" in rec["drifters"][1]

@@ -13,7 +13,7 @@ from oceanloc.cli._options import parse_origin
 from oceanloc.config.drift import DriftScenario, load_drift_scenario
 from oceanloc.evaluation.drift import plan_scenario
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.io.paths import write_path_csv, write_path_geojson
+from oceanloc.io.paths import safe_file_stem, write_path_csv, write_path_geojson
 from oceanloc.io.records import Provenance
 from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
 
@@ -70,7 +70,7 @@ def drift_plan(
     plan = plan_scenario(sc, planner, seed, iterations=iterations)
     console.print(plan_table(plan))
     folder = ensure_dir(out)
-    stem = f"{sc.name}-{plan.planner}"
+    stem = safe_file_stem(f"{sc.name}-{plan.planner}")
     wrote(plan_figure(folder / f"{stem}.png", plan))
     if json_path is not None:
         write_json(json_path, plan, scenario_provenance(sc, plan.seed))

@@ -69,6 +69,15 @@ class PlannerRuns:
     compute_s: FloatArray
     field: IntArray
 
+    def to_record(self) -> dict[str, Any]:
+        """Per-run lists (energy ``None`` where a plan failed)."""
+        return {
+            "success": self.success.tolist(),
+            "energy_wh": [float(e) if np.isfinite(e) else None for e in self.energy_wh],
+            "compute_s": self.compute_s.tolist(),
+            "field": self.field.tolist(),
+        }
+
 
 @dataclass(frozen=True, slots=True)
 class _PlanTask:
@@ -140,15 +149,7 @@ class DriftMonteCarlo:
             "seed": self.seed,
             "iterations": self.iterations,
             "direct_flight_wh": self.direct_flight_wh.tolist(),
-            "planners": {
-                name: {
-                    "success": r.success.tolist(),
-                    "energy_wh": [None if not np.isfinite(e) else float(e) for e in r.energy_wh],
-                    "compute_s": r.compute_s.tolist(),
-                    "field": r.field.tolist(),
-                }
-                for name, r in self.runs.items()
-            },
+            "planners": {name: r.to_record() for name, r in self.runs.items()},
         }
 
     def to_dataset(self, prefix: str = "") -> xr.Dataset:

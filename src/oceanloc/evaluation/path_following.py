@@ -170,12 +170,7 @@ class FollowingStudy:
             "settings": _settings_record(self.settings),
             **self.summary.to_record(),
             "plan": self.plan.to_record(),
-            "per_run": {
-                "arrived": self.runs.arrived.tolist(),
-                "flight_energy_wh": self.runs.flight_energy_wh.tolist(),
-                "replans": self.runs.replans.tolist(),
-                "duration_s": self.runs.duration_s.tolist(),
-            },
+            "per_run": self.runs.to_record(),
         }
 
     def to_dataset(self) -> xr.Dataset:

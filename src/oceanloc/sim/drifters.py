@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,17 @@ class SwapResult:
     problems: tuple[DriftProblem, DriftProblem]
     results: tuple[DriftPlanResult, DriftPlanResult]
     min_separation_m: float
+
+    def to_record(self) -> dict[str, Any]:
+        """Both drifters' start, goal (m) and plan, and the closest approach (m; ``None`` if a plan
+        failed)."""
+        return {
+            "min_separation_m": self.min_separation_m,
+            "drifters": [
+                {"start_m": p.start_m.tolist(), "goal_m": p.goal_m.tolist(), "plan": r.to_record()}
+                for p, r in zip(self.problems, self.results, strict=True)
+            ],
+        }
 
 
 def swap_positions(

@@ -18,6 +18,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -113,6 +114,16 @@ class FollowingRuns:
     @property
     def runs(self) -> int:
         return int(self.arrived.size)
+
+    def to_record(self) -> dict[str, Any]:
+        """Per-run outcomes as plain lists (energies in Wh, durations in s); tracks are for figures only."""
+        return {
+            "planned_energy_wh": self.planned_energy_wh,
+            "arrived": self.arrived.tolist(),
+            "flight_energy_wh": self.flight_energy_wh.tolist(),
+            "replans": self.replans.tolist(),
+            "duration_s": self.duration_s.tolist(),
+        }
 
     def kept_runs(self) -> IntArray:
         """Run indices whose tracks were kept, in order."""

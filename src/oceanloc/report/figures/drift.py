@@ -19,6 +19,7 @@ from matplotlib.ticker import MaxNLocator
 from oceanloc._typing import FloatArray
 from oceanloc.evaluation.drift import ScenarioPlan
 from oceanloc.evaluation.path_following import FollowingStudy, SwapStudy
+from oceanloc.io.paths import safe_file_stem
 from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.problem import DriftProblem, SearchTree
 from oceanloc.report.figures._style import save_figure
@@ -371,7 +372,7 @@ def plan_figure(path: Path, plan: ScenarioPlan) -> Path:
 def following_study_figure(folder: Path, study: FollowingStudy) -> Path:
     """``oceanloc simulate drift-follow``: the plan, its watch circles and the first followed tracks."""
     return following_figure(
-        folder / f"{study.scenario}-following.png",
+        folder / f"{safe_file_stem(study.scenario)}-following.png",
         study.problem,
         study.plan.path,  # type: ignore[arg-type]
         study.runs.tracks(),
@@ -385,7 +386,7 @@ def swap_figures(folder: Path, study: SwapStudy) -> list[Path]:
     """``oceanloc simulate drift-swap``: both plans in one figure, then each drifter following its plan."""
     written = [
         swap_figure(
-            folder / f"{study.scenario}-plans.png",
+            folder / f"{safe_file_stem(study.scenario)}-plans.png",
             study.swap.problems,
             [r.path for r in study.swap.results],
             "Two drifters swap positions (thesis Figs. 70-71)",
@@ -398,7 +399,7 @@ def swap_figures(folder: Path, study: SwapStudy) -> list[Path]:
             continue
         written.append(
             following_figure(
-                folder / f"{study.scenario}-drifter{k + 1}-following.png",
+                folder / f"{safe_file_stem(study.scenario)}-drifter{k + 1}-following.png",
                 prob,
                 res.path,
                 f.tracks(),
