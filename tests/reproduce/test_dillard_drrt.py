@@ -65,6 +65,14 @@ def test_small_reproduction_json_has_the_issue_shape():
     assert ds["field_flight_energy"].attrs["units"] == "W h"
 
 
+def test_the_default_random_fields_scale_with_runs():
+    from oceanloc.reproduce.dillard_drrt import default_fields
+
+    assert [default_fields(r) for r in (1, 20, 50, 51, 1000, 5000)] == [1, 1, 1, 2, 20, 20]
+    # --runs 20: 60 runs on the fixed field and 60 across one random field, nothing else.
+    assert planned_runs(20) == 120 and planned_runs(20, 0) == 60
+
+
 def test_random_fields_never_outnumber_runs():
     done = []
     report = reproduce_dillard_drrt(

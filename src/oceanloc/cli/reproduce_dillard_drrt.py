@@ -33,8 +33,11 @@ def dillard_drrt(
         help="Runs per planner on the fixed field, and per planner across the random fields.",
     ),
     seed: int = typer.Option(2014, "--seed", min=0, help="Master seed."),
-    fields: int = typer.Option(
-        20, "--fields", min=0, help="Random obstacle fields (the thesis' generator; at most --runs); 0 skips."
+    fields: int | None = typer.Option(
+        None,
+        "--fields",
+        min=0,
+        help="Random obstacle fields (the thesis' generator); default one per 50 runs, at most 20; 0 skips.",
     ),
     iterations: int = typer.Option(
         25_000, "--iterations", min=1, help="Iterations of the optimality-seeking mode."
@@ -51,8 +54,9 @@ def dillard_drrt(
     """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner.
 
     Every planner makes --runs runs on the fixed field and --runs runs spread over the random fields (one
-    best-achievable lattice per field). Compute times are wall-clock per run inside its worker; with
-    several workers sharing the cores they run longer than alone (use --workers 1, or make bench).
+    best-achievable lattice per field, one field per 50 runs by default). Compute times are wall-clock
+    per run inside its worker; with several workers sharing the cores they run longer than alone (use
+    --workers 1, or make bench).
     """
     from oceanloc.report.figures.drift import dillard_drrt_figures
     from oceanloc.report.tables.drift import dillard_fields_table, dillard_notes, dillard_table

@@ -4,9 +4,9 @@ Table 4 compares a single-solution DR-RRT* with an optimality-seeking one (25,00
 runs on one random obstacle field that was then fixed; energies are the flights of the planned path,
 against 49.5 Wh for flying straight from start to goal. The thesis' field is not published, so oceanloc
 fixes one (two rectangles, ``dillard-drift-fixed``) and also reports across random fields drawn by the
-thesis' own generator (20 by default, with as many runs per planner in all as on the fixed field). Beside
-both DR-RRT* modes it runs oceanloc's lattice planner, and every planner's mean energy is also divided by
-the best achievable energy (:func:`best_achievable`). The Monte Carlo itself is
+thesis' own generator (one per 50 runs, at most 20, with as many runs per planner in all as on the fixed
+field). Beside both DR-RRT* modes it runs oceanloc's lattice planner, and every planner's mean energy is
+also divided by the best achievable energy (:func:`best_achievable`). The Monte Carlo itself is
 :mod:`oceanloc.evaluation.drift`.
 
 Units follow the thesis (2000 m per nautical mile, so 20 kn = 11.1 m/s and direct flight is 49.5 Wh);
@@ -17,6 +17,7 @@ far more than the 22 % and 27 % it prints (about 42 % and 43 % here).
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Callable
 from concurrent.futures import Executor
@@ -203,10 +204,22 @@ class DillardReport:
         return ds
 
 
-def planned_runs(runs: int, fields: int, planners: int = len(PLANNER_NAMES)) -> int:
+RUNS_PER_FIELD = 50
+"""Default random-field study: one field per 50 runs (20 fields at the thesis' 1000 runs)."""
+MAX_FIELDS = 20
+
+
+def default_fields(runs: int) -> int:
+    """Random fields when none are asked for: ``ceil(runs / 50)``, at most 20, so the study's lattice
+    references (one per field) scale with ``runs`` like everything else."""
+    return min(MAX_FIELDS, max(1, math.ceil(runs / RUNS_PER_FIELD)))
+
+
+def planned_runs(runs: int, fields: int | None = None, planners: int = len(PLANNER_NAMES)) -> int:
     """Planner runs :func:`reproduce_dillard_drrt` makes: ``runs`` per planner on the fixed field and, with
     random fields, ``runs`` per planner across them (what its progress counts)."""
-    return planners * runs * (2 if fields > 0 else 1)
+    n_fields = default_fields(runs) if fields is None else fields
+    return planners * runs * (2 if n_fields > 0 else 1)
 
 
 def random_fields(problem: DriftProblem, fields: int, seed: int) -> list[DriftProblem]:
@@ -218,7 +231,7 @@ def reproduce_dillard_drrt(
     runs: int = 1000,
     seed: int = 2014,
     *,
-    fields: int = 20,
+    fields: int | None = None,
     iterations: int = 25_000,
     reference_spacing_m: float = REFERENCE_OPTIONS.spacing_m,
     executor: Executor | None = None,
@@ -235,9 +248,10 @@ def reproduce_dillard_drrt(
     seed : int
         Master seed; fixed-field run ``r`` of every planner uses generator ``(seed, r)``; random fields are
         drawn with ``(seed + 1, f)`` and their runs use ``(seed + 2, r)``.
-    fields : int
+    fields : int, optional
         Random fields drawn by the thesis' generator (0 to skip; at most ``runs`` are used, so every field
-        gets at least one run per planner). Each field costs one best-achievable lattice solve.
+        gets at least one run per planner); default :func:`default_fields` (one per 50 runs, at most 20).
+        Each field costs one best-achievable lattice solve.
     iterations : int
         Iteration budget of the optimality-seeking mode (25,000 in the thesis).
     reference_spacing_m : float
@@ -264,7 +278,7 @@ def reproduce_dillard_drrt(
         [problem], runs, seed, iterations=iterations, executor=executor, progress=progress
     )
     summaries = {name: summarize(r, problem.direct_flight_wh, best) for name, r in fixed.runs.items()}
-    n_fields = min(fields, runs)
+    n_fields = min(default_fields(runs) if fields is None else fields, runs)
     field_summaries: dict[str, FieldsSummary] = {}
     field_best = np.zeros(0)
     field_mc = None
