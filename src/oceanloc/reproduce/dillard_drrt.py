@@ -286,7 +286,8 @@ def reproduce_dillard_drrt(
         problems = random_fields(problem, n_fields, seed + 1)
         tic = time.perf_counter()
         field_best = np.asarray([best_achievable(p, field_options).flight_energy_wh for p in problems])
-        say(f"best achievable on {n_fields} random fields ({time.perf_counter() - tic:.0f} s)")
+        plural = "s" if n_fields != 1 else ""
+        say(f"best achievable on {n_fields} random field{plural} ({time.perf_counter() - tic:.0f} s)")
         field_mc = drift_monte_carlo(
             problems, runs, seed + 2, iterations=iterations, executor=executor, progress=progress
         )

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.signal import lfilter
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.config.drift import FollowingSettings
@@ -50,15 +51,16 @@ class _TrueCurrent:
 def gauss_markov_noise(
     rng: np.random.Generator, n_steps: int, dt_s: float, sigma_mps: float, tau_s: float
 ) -> FloatArray:
-    """``(n_steps, 2)`` stationary first-order Gauss-Markov current (std ``sigma``, time scale ``tau``)."""
+    """``(n_steps, 2)`` stationary first-order Gauss-Markov current (std ``sigma``, time scale ``tau``):
+    ``x_k = a x_(k-1) + w_k`` with ``a = exp(-dt / tau)``, ``w_k ~ N(0, sigma^2 (1 - a^2))`` and ``x_0`` drawn
+    from the stationary law (a linear recursive filter, not a Python loop)."""
     a = math.exp(-dt_s / tau_s)
     w = rng.standard_normal((n_steps, 2)) * sigma_mps * math.sqrt(1.0 - a * a)
-    out = np.empty((n_steps, 2))
     state = rng.standard_normal(2) * sigma_mps
-    for k in range(n_steps):
-        state = a * state + w[k]
-        out[k] = state
-    return out
+    if n_steps == 0:
+        return w
+    out, _ = lfilter([1.0], [1.0, -a], w, axis=0, zi=(a * state)[None, :])
+    return np.asarray(out, dtype=float)
 
 
 @dataclass(slots=True)

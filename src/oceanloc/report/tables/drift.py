@@ -206,7 +206,7 @@ def dillard_fields_table(report: DillardReport) -> Table | None:
         return None
     n_fields = report.field_best_wh.size
     table = Table(
-        title=f"Across {n_fields} random fields (the thesis' generator), "
+        title=f"Across {n_fields} random field{'s' if n_fields != 1 else ''} (the thesis' generator), "
         f"{report.random_fields.n_runs} runs per planner"
     )
     table.add_column("planner", no_wrap=True, min_width=25)
