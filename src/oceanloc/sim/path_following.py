@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.signal import lfilter
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.config.drift import FollowingSettings
@@ -54,6 +53,8 @@ def gauss_markov_noise(
     """``(n_steps, 2)`` stationary first-order Gauss-Markov current (std ``sigma``, time scale ``tau``):
     ``x_k = a x_(k-1) + w_k`` with ``a = exp(-dt / tau)``, ``w_k ~ N(0, sigma^2 (1 - a^2))`` and ``x_0`` drawn
     from the stationary law (a linear recursive filter, not a Python loop)."""
+    from scipy.signal import lfilter  # here: the command line starts without scipy
+
     a = math.exp(-dt_s / tau_s)
     w = rng.standard_normal((n_steps, 2)) * sigma_mps * math.sqrt(1.0 - a * a)
     state = rng.standard_normal(2) * sigma_mps
