@@ -53,10 +53,10 @@ def dillard_drrt(
 ) -> None:
     """DR-RRT* Monte Carlo (thesis Table 4): single-solution, optimality-seeking and oceanloc's planner.
 
-    Every planner makes --runs runs on the fixed field and --runs runs spread over the random fields (one
-    best-achievable lattice per field, one field per 50 runs by default). Compute times are wall-clock
-    per run inside its worker; with several workers sharing the cores they run longer than alone (use
-    --workers 1, or make bench).
+    Every planner makes --runs runs on the fixed field and --runs runs spread over the
+    random fields (one best-achievable lattice per field, one field per 50 runs by default).
+    Compute times are wall-clock per run inside its worker; with several workers sharing the
+    cores they run longer than alone (use --workers 1, or make bench).
     """
     from oceanloc.report.figures.drift import dillard_drrt_figures
     from oceanloc.report.tables.drift import dillard_fields_table, dillard_notes, dillard_table
