@@ -78,3 +78,18 @@ def test_errors_name_the_file_table_and_field(tmp_path, old, new, message):
 def test_unknown_builtin_is_a_config_error():
     with pytest.raises(ConfigError, match="built-in drift scenario"):
         load_drift_scenario("dillard-drift-nope")
+
+
+def test_the_scenario_keeps_its_toml_text_and_data_files(tmp_path):
+    sc = load_drift_scenario(_write(tmp_path, BASE))
+    assert sc.toml_text == BASE and sc.data_files == ()
+    builtin = load_drift_scenario("dillard-drift-fixed")
+    assert "[scenario]" in builtin.toml_text and 'name = "dillard-drift-fixed"' in builtin.toml_text
+    gyre = load_drift_scenario("dillard-drift-gyre-netcdf")
+    assert len(gyre.data_files) == 1 and gyre.data_files[0].endswith("dillard-drift-gyre.nc")
+
+
+def test_an_unknown_planner_kind_names_the_field(tmp_path):
+    text = BASE + '[planner]\nkind = "rrt-connect"\n'
+    with pytest.raises(ConfigError, match=r"\[planner\] field 'kind': must be one of thesis-single"):
+        load_drift_scenario(_write(tmp_path, text))

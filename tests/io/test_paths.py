@@ -34,3 +34,11 @@ def test_geojson_is_lonlat_with_legs_and_hop_points(tmp_path):
     assert abs(float(y) - 500.0) < 0.05 and abs(float(x) - 60.0) < 0.05
     out = write_path_geojson(tmp_path / "p.geojson", PATH, proj)
     assert json.loads(out.read_text())["type"] == "FeatureCollection"
+
+
+def test_safe_file_stem_keeps_names_in_one_folder():
+    from oceanloc.io.paths import safe_file_stem
+
+    assert safe_file_stem("dillard-drift-fixed-oceanloc") == "dillard-drift-fixed-oceanloc"
+    assert safe_file_stem("odd[/x] name") == "odd__x__name"
+    assert safe_file_stem("..") == "unnamed"

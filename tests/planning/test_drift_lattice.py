@@ -132,3 +132,26 @@ def test_invalid_start_fails():
     problem = uniform_problem(rectangles=[[-100.0, 100.0, -100.0, 100.0]])
     res = plan_lattice(problem, np.random.default_rng(0))
     assert res.status is PlanStatus.FAILED and "start" in res.message
+
+
+def test_refinement_parts_clouds_and_link():
+    from oceanloc.planning.drift_rrt.lattice_refine import landing_clouds, link
+    from oceanloc.planning.drift_rrt.lattice_values import Leg
+    from tests.planning.drift_fixtures import uniform_problem
+
+    problem = uniform_problem()
+    legs = [
+        Leg(drift_steps=3, takeoff=np.array([500.0, 0.0]), landing=np.array([900.0, 300.0]), to_goal=False)
+    ]
+    clouds = landing_clouds(problem, legs, half_width=2, half_extent_m=100.0)
+    assert clouds.n_stages == 2 and [c.shape for c in clouds.clouds] == [(25, 2), (25, 2)]
+    assert clouds.bounds.tolist() == [0, 25, 50]
+    # One particle with two take-off samples; two targets with values 0 and 50: the sample at (0, 0) flies
+    # 100 m to the first target (100 + 0) rather than 60 m to the second (60 + 50).
+    samples = np.array([[[0.0, 0.0]], [[1000.0, 0.0]]])
+    choice = link(
+        problem, 1e9, samples, np.zeros((2, 1)), np.array([[100.0, 0.0], [0.0, 60.0]]), np.array([0.0, 50.0])
+    )
+    assert (
+        choice.value.tolist() == [100.0] and choice.sample.tolist() == [0] and choice.target.tolist() == [0]
+    )

@@ -122,3 +122,15 @@ def test_fast_cell_rollout_is_identical_to_the_generic_one(monkeypatch):
     generic = roll()
     for name in ("samples_m", "goal_distance_m", "goal_step", "reaches_goal", "closest_m", "end_step"):
         np.testing.assert_array_equal(getattr(fast, name), getattr(generic, name))
+
+
+def test_one_planner_name_parser_for_files_commands_and_the_factory():
+    from oceanloc.errors import ConfigError
+    from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner, parse_planner_name
+
+    assert parse_planner_name(" OceanLoc ") == "oceanloc"
+    assert PLANNER_NAMES == ("thesis-single", "thesis-optimality-seeking", "oceanloc")
+    with pytest.raises(ConfigError, match=r"--planner must be one of thesis-single, .*got 'rrt'"):
+        parse_planner_name("rrt", "--planner")
+    with pytest.raises(ConfigError, match="planner must be one of"):
+        make_planner("rrt")

@@ -5,29 +5,39 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
-from rich.table import Table
 
 from oceanloc.cli import root
-from oceanloc.cli._common import console, ensure_dir, err_console
-from oceanloc.config.drift import DRIFT_PLANNERS, load_drift_scenario, problem_from_scenario
-from oceanloc.errors import ConfigError
+from oceanloc.cli._common import JsonOut, cli_provenance, console, ensure_dir, err_console, escape, write_json
+from oceanloc.cli._options import parse_origin
+from oceanloc.config.drift import DriftScenario, load_drift_scenario
+from oceanloc.evaluation.drift import plan_scenario
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.io.paths import write_path_csv, write_path_geojson
-from oceanloc.planning.drift_rrt.planner import make_planner
-from oceanloc.planning.drift_rrt.problem import PlanBudget
-from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
+from oceanloc.io.paths import safe_file_stem, write_path_csv, write_path_geojson
+from oceanloc.io.records import Provenance
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
+
+PlannerOption = Annotated[
+    str | None,
+    typer.Option("--planner", help=f"One of {', '.join(PLANNER_NAMES)} (default: the scenario's)."),
+]
 
 
-def _origin(text: str | None) -> LocalProjection | None:
-    if text is None:
-        return None
-    try:
-        lon, lat = (float(v) for v in text.split(","))
-    except ValueError:
-        raise ConfigError(f"--origin must be LON,LAT in degrees, got '{text}'") from None
-    return LocalProjection(lat0_deg=lat, lon0_deg=lon)
+def scenario_provenance(scenario: DriftScenario, seed: int | None) -> Provenance:
+    """Provenance of a drift command: the scenario's name, the hash of its TOML text, its data files."""
+    return cli_provenance(
+        seed=seed, scenario=scenario.name, scenario_toml=scenario.toml_text, inputs=scenario.data_files
+    )
+
+
+def wrote(path: Path) -> None:
+    """Say on stderr that a file was written (its name escaped)."""
+    err_console.print(f"wrote {escape(str(path))}", highlight=False)
+
+
+def _projection(origin: str) -> LocalProjection:
+    o = parse_origin(origin)
+    return LocalProjection(lat0_deg=o.lat_deg, lon0_deg=o.lon_deg)
 
 
 @root.app.command("drift-plan")
@@ -35,9 +45,7 @@ def drift_plan(
     scenario: str = typer.Option(
         ..., "--scenario", help="Drift scenario file or built-in name (dillard-drift-*)."
     ),
-    planner: str | None = typer.Option(
-        None, "--planner", help=f"One of {', '.join(DRIFT_PLANNERS)} (default: the scenario's)."
-    ),
+    planner: PlannerOption = None,
     seed: int | None = typer.Option(None, "--seed", min=0, help="Planner seed (default: the scenario's)."),
     iterations: int | None = typer.Option(
         None, "--iterations", min=1, help="Iteration budget of the DR-RRT* planners."
@@ -46,82 +54,31 @@ def drift_plan(
         "out/drift-plan"
     ),
     origin: str | None = typer.Option(
-        None, "--origin", help="LON,LAT of the local frame's origin, to write GeoJSON."
+        None,
+        "--origin",
+        help="LAT,LON[,H] (degrees, degrees, metres; H is ignored) of the local frame's origin, to write "
+        "GeoJSON for a scenario in a local frame.",
     ),
+    json_path: JsonOut = None,
 ) -> None:
     """Plan the least-energy drift/flight route of a scenario; print its summary, write PNG, CSV, GeoJSON."""
-    from oceanloc.report.figures.drift import paths_figure, tree_figure
+    from oceanloc.report.figures.drift import plan_figure
+    from oceanloc.report.tables.drift import plan_table
 
     sc = load_drift_scenario(scenario)
-    name = planner or sc.planner
-    if name not in DRIFT_PLANNERS:
-        raise ConfigError(f"--planner must be one of {', '.join(DRIFT_PLANNERS)}; got '{name}'")
-    problem = problem_from_scenario(sc)
-    rng = np.random.default_rng(sc.seed if seed is None else seed)
-    if name.startswith("thesis"):
-        if problem.hdop is None:
-            raise ConfigError(f"{scenario}: the DR-RRT* planners need an [hdop] table (flock geometry)")
-        mode = "single" if name == "thesis-single" else "optimality-seeking"
-        budget = PlanBudget(max_iterations=iterations) if iterations else None
-        result = plan_thesis(problem, rng, budget, ThesisOptions(mode=mode, keep_tree=True))  # type: ignore[arg-type]
-    else:
-        result = make_planner(name)(problem, rng)
-    energy = problem.energy
-    table = Table(title=f"{sc.name}: {name}", show_header=False)
-    table.add_row("status", f"{result.status.value} - {result.message}")
-    table.add_row("currents", sc.currents_description)
-    table.add_row(
-        "start -> goal (m)",
-        f"{problem.start_m.tolist()} -> {problem.goal_m.tolist()} (within {problem.goal_tolerance_m:g} m)",
-    )
-    if result.path is not None:
-        path = result.path
-        account = path.energy(energy)
-        table.add_row("flights", f"{path.hops_m().shape[0]} ({path.flight_distance_m:.0f} m flown)")
-        table.add_row(
-            "flight energy",
-            f"{result.flight_energy_wh:.2f} Wh (direct flight {result.direct_flight_wh:.2f} Wh, "
-            f"saving {100 * result.saving:.1f}%)",
-        )
-        table.add_row(
-            "duration", f"{account.duration_s / 3600:.2f} h (drift {path.drift_time_s / 3600:.2f} h)"
-        )
-        table.add_row(
-            "energy balance (IV.14)",
-            f"solar +{account.solar_wh:.1f} Wh, loads -{account.loads_wh:.1f} Wh, "
-            f"flight -{account.flight_wh:.1f} Wh: net {account.net_wh:+.1f} Wh",
-        )
-    table.add_row("compute", f"{1e3 * result.compute_s:.1f} ms")
-    table.add_row("units", energy.convention)
-    console.print(table)
+    projection = sc.projection if origin is None else _projection(origin)
+    plan = plan_scenario(sc, planner, seed, iterations=iterations)
+    console.print(plan_table(plan))
     folder = ensure_dir(out)
-    stem = f"{sc.name}-{name}"
-    if result.tree is not None:
-        fig = tree_figure(folder / f"{stem}.png", problem, result.tree, result.path, f"{sc.name}: {name}")
-    else:
-        fig = paths_figure(
-            folder / f"{stem}.png",
-            problem,
-            {name: result.path} if result.path is not None else {},
-            f"{sc.name}: {name}",
-        )
-    err_console.print(f"wrote {fig}")
-    if result.path is None:
+    stem = safe_file_stem(f"{sc.name}-{plan.planner}")
+    wrote(plan_figure(folder / f"{stem}.png", plan))
+    if json_path is not None:
+        write_json(json_path, plan, scenario_provenance(sc, plan.seed))
+    if plan.result.path is None:
         return
-    projection = _origin(origin) or sc.projection
-    err_console.print(f"wrote {write_path_csv(folder / f'{stem}.csv', result.path, projection)}")
-    if projection is not None:
-        props = {
-            "scenario": sc.name,
-            "planner": name,
-            "status": result.status.value,
-            "flight_energy_wh": result.flight_energy_wh,
-            "units": energy.convention,
-        }
-        err_console.print(
-            f"wrote {write_path_geojson(folder / f'{stem}.geojson', result.path, projection, props)}"
-        )
-    else:
-        err_console.print(
-            "no GeoJSON: the scenario is in a local frame; pass --origin LON,LAT to georeference it"
-        )
+    wrote(write_path_csv(folder / f"{stem}.csv", plan.result.path, projection))
+    if projection is None:
+        err_console.print("no GeoJSON: the scenario is in a local frame; pass --origin LAT,LON to place it")
+        return
+    props = plan.summary()
+    wrote(write_path_geojson(folder / f"{stem}.geojson", plan.result.path, projection, props))

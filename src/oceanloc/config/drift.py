@@ -65,6 +65,7 @@ and the path-following trial::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -84,18 +85,15 @@ from oceanloc.models.currents import (
 from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
-from oceanloc.models.obstacles import ObstacleMap
+from oceanloc.models.obstacles import ObstacleMap, OccupancyGrid
 from oceanloc.planning.drift_rrt.objective import HdopTerm
-from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
+from oceanloc.planning.drift_rrt.planner import DriftPlannerName, parse_planner_name
 from oceanloc.planning.drift_rrt.problem import DriftProblem
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.units import DEG
 
 CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
-DRIFT_PLANNERS: tuple[str, ...] = PLANNER_NAMES
-"""``thesis-single``: DR-RRT* stopping at its first solution; ``thesis-optimality-seeking``: DR-RRT* over
-25,000 iterations keeping the cheapest solution; ``oceanloc``: the drift/hop lattice planner."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -162,7 +160,7 @@ class DriftScenario:
         Other flock members for the HDOP term.
     hdop_target_m : (2,) float or None
     planner : str
-        Default planner (one of :data:`DRIFT_PLANNERS`).
+        Default planner (one of :data:`~oceanloc.planning.drift_rrt.planner.PLANNER_NAMES`).
     seed : int
         Default planner seed.
     time_weight_wh_per_h : float
@@ -171,6 +169,10 @@ class DriftScenario:
     projection : LocalProjection or None
         Local frame of a longitude/latitude current product (plans are written in lon/lat too).
     currents_description : str
+    data_files : tuple of str
+        Data files the scenario reads (a current product), for provenance.
+    toml_text : str
+        The scenario's TOML text (its SHA-256 goes into every record's provenance).
     """
 
     name: str
@@ -188,12 +190,14 @@ class DriftScenario:
     max_leg_m: float | None = None
     hdop_others_m: np.ndarray | None = None
     hdop_target_m: np.ndarray | None = None
-    planner: str = "oceanloc"
+    planner: DriftPlannerName = "oceanloc"
     seed: int = 1
     time_weight_wh_per_h: float = 0.0
     following: FollowingSettings = field(default_factory=FollowingSettings)
     projection: LocalProjection | None = None
     currents_description: str = ""
+    data_files: tuple[str, ...] = ()
+    toml_text: str = field(default="", repr=False)
 
 
 def builtin_drift_scenarios() -> list[str]:
@@ -202,29 +206,47 @@ def builtin_drift_scenarios() -> list[str]:
 
 
 def load_drift_scenario(name_or_path: str | Path) -> DriftScenario:
-    """Load a built-in drift scenario by name or a scenario file by path (data files resolve beside it)."""
+    """Load a built-in drift scenario by name or a scenario file by path (data files resolve beside it).
+
+    The scenario keeps its TOML text (:attr:`DriftScenario.toml_text`) so results can carry its hash.
+    """
     root, folder = resolve_scenario(name_or_path, "drift")
-    return drift_scenario_from_table(root, base_dir=folder or Path(str(builtin_folder("drift"))))
+    if folder is None:
+        text = builtin_folder("drift").joinpath(f"{name_or_path}.toml").read_text(encoding="utf-8")
+    else:
+        text = Path(name_or_path).read_text(encoding="utf-8")
+    scenario = drift_scenario_from_table(root, base_dir=folder or Path(str(builtin_folder("drift"))))
+    return dataclasses.replace(scenario, toml_text=text)
 
 
-def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection | None, str, object]:
+@dataclass(frozen=True, slots=True, kw_only=True)
+class CurrentSettings:
+    """``[currents]``: the planning current, its georeference, a one-line description, land cells."""
+
+    field: CurrentField
+    projection: LocalProjection | None
+    description: str
+    land: OccupancyGrid | None = None
+    data_files: tuple[str, ...] = ()
+
+
+def _currents(t: Table, base_dir: Path) -> CurrentSettings:
     kind = t.str("kind", "thesis-vortex", choices=CURRENT_KINDS)
-    land = None
     if kind == "thesis-vortex":
         interp = t.str("interpolation", "cell", choices=("cell", "linear"))
         scale = t.float("scale_m", 10_000.0, lo=1.0, lo_open=False)
         f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
         how = "piecewise constant per cell" if interp == "cell" else "bilinear"
-        desc = f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
-        return f, None, desc, land
+        return CurrentSettings(
+            field=f, projection=None, description=f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
+        )
     if kind == "vortex":
         scale = t.float("scale_m", 10_000.0, lo=1.0)
         half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True)
-        return (
-            VortexCurrent(scale_m=scale, half_width_m=half),
-            None,
-            f"analytic thesis vortex (scale {scale:g} m)",
-            land,
+        return CurrentSettings(
+            field=VortexCurrent(scale_m=scale, half_width_m=half),
+            projection=None,
+            description=f"analytic thesis vortex (scale {scale:g} m)",
         )
     if kind == "double-gyre":
         length = t.float("length_m", 5000.0, lo=0.0, lo_open=True)
@@ -239,15 +261,19 @@ def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection |
             omega_rad_s=2 * math.pi / (period_h * 3600.0),
             origin_m=(float(origin[0]), float(origin[1])),
         )
-        return f, None, f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}", land
+        desc = f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}"
+        return CurrentSettings(field=f, projection=None, description=desc)
     if kind == "uniform":
         vel = t.vector("velocity_mps", 2)
-        return (
-            UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
-            None,
-            f"uniform {vel.tolist()} m/s",
-            land,
+        return CurrentSettings(
+            field=UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
+            projection=None,
+            description=f"uniform {vel.tolist()} m/s",
         )
+    return _netcdf_currents(t, base_dir)
+
+
+def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
     rel = t.str("path")
     path = Path(rel) if Path(rel).is_absolute() else base_dir / rel
     u = t.str("u", "") or None
@@ -263,41 +289,55 @@ def _currents(t: Table, base_dir: Path) -> tuple[CurrentField, LocalProjection |
         origin_lonlat_deg=None if origin is None else (float(origin[0]), float(origin[1])),
         interpolation=interp,  # type: ignore[arg-type]
     )
-    return product.field, product.projection, product.description, land_obstacles(product.field)
+    return CurrentSettings(
+        field=product.field,
+        projection=product.projection,
+        description=product.description,
+        land=land_obstacles(product.field),
+        data_files=(str(path),),
+    )
 
 
-def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> DriftScenario:
-    """Validate a parsed drift scenario; every error names the file, table and field."""
-    base = base_dir or Path.cwd()
-    head = root.table("scenario")
-    name = head.str("name")
-    description = head.str("description", "")
-    head.check_unknown()
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DriftSettings:
+    """``[drift]``: integrator, step (s) and the longest drift considered (s)."""
 
-    cur_t = root.table("currents")
-    field_, projection, cur_desc, land = _currents(cur_t, base)
-    cur_t.check_unknown()
+    integrator: Method
+    dt_s: float
+    horizon_s: float
 
-    drift_t = root.table("drift", required=False)
-    method = drift_t.str("integrator", "rk4", choices=METHODS)
-    dt = drift_t.float("dt_s", 60.0, lo=0.0, lo_open=True, hi=86_400.0)
-    horizon = drift_t.float("horizon_h", 24.0, lo=0.0, lo_open=True, hi=24.0 * 365)
-    drift_t.check_unknown()
 
-    map_t = root.table("map", required=False)
-    default_bounds = field_.bounds_m
-    if map_t.has("bounds_m") or default_bounds is None:
-        bounds = map_t.vector("bounds_m", 4)
+def _drift_settings(t: Table) -> DriftSettings:
+    method = t.str("integrator", "rk4", choices=METHODS)
+    dt = t.float("dt_s", 60.0, lo=0.0, lo_open=True, hi=86_400.0)
+    horizon_h = t.float("horizon_h", 24.0, lo=0.0, lo_open=True, hi=24.0 * 365)
+    t.check_unknown()
+    return DriftSettings(integrator=method, dt_s=dt, horizon_s=horizon_h * 3600.0)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MapSettings:
+    """``[map]``: the obstacle map and whether flights must avoid obstacles too."""
+
+    obstacles: ObstacleMap
+    flights_avoid_obstacles: bool
+
+
+def _map_bounds(t: Table, default_bounds: tuple[float, float, float, float] | None) -> np.ndarray:
+    if t.has("bounds_m") or default_bounds is None:
+        bounds = t.vector("bounds_m", 4)
     else:
         bounds = np.asarray(default_bounds, dtype=float)
     if not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
-        raise map_t.error(
+        raise t.error(
             "bounds_m", f"must be [x_min, x_max, y_min, y_max] with min < max, got {bounds.tolist()}"
         )
-    inflation = map_t.float("inflation_m", 0.0, lo=0.0)
-    no_fly = map_t.bool("flights_avoid_obstacles", False)
+    return bounds
+
+
+def _rectangles(t: Table) -> np.ndarray:
     rects = []
-    for rt in map_t.tables("rectangles"):
+    for rt in t.tables("rectangles"):
         xr = rt.vector("x_m", 2)
         yr = rt.vector("y_m", 2)
         if not (xr[0] < xr[1] and yr[0] < yr[1]):
@@ -307,8 +347,12 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
             )
         rects.append([xr[0], xr[1], yr[0], yr[1]])
         rt.check_unknown()
+    return np.asarray(rects, dtype=float).reshape(-1, 4)
+
+
+def _polygons(t: Table) -> tuple[np.ndarray, ...]:
     polys = []
-    for pt in map_t.tables("polygons"):
+    for pt in t.tables("polygons"):
         raw = pt._get("vertices_m", None)
         try:
             verts = np.asarray(raw, dtype=float)
@@ -318,92 +362,177 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
             raise pt.error("vertices_m", f"needs at least three finite [x, y] vertices, got {raw!r}")
         polys.append(verts)
         pt.check_unknown()
-    map_t.check_unknown()
+    return tuple(polys)
+
+
+def _map_settings(t: Table, currents: CurrentSettings) -> MapSettings:
+    bounds = _map_bounds(t, currents.field.bounds_m)
+    inflation = t.float("inflation_m", 0.0, lo=0.0)
+    no_fly = t.bool("flights_avoid_obstacles", False)
+    rects = _rectangles(t)
+    polys = _polygons(t)
+    t.check_unknown()
     obstacles = ObstacleMap(
         bounds_m=tuple(bounds.tolist()),
-        rectangles_m=np.asarray(rects, dtype=float).reshape(-1, 4),
-        polygons_m=tuple(polys),
-        grid=land,  # type: ignore[arg-type]
+        rectangles_m=rects,
+        polygons_m=polys,
+        grid=currents.land,
         inflation_m=inflation,
     )
+    return MapSettings(obstacles=obstacles, flights_avoid_obstacles=no_fly)
 
-    route = root.table("route")
-    start = route.vector("start_m", 2)
-    goal = route.vector("goal_m", 2)
-    tol = route.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True)
-    route.check_unknown()
 
-    veh = root.table("vehicle", required=False)
-    energy = EnergyBudget(
-        base_load_w=veh.float("base_load_w", 5.0, lo=0.0),
-        sensing_w=veh.float("sensing_w", 10.0, lo=0.0),
-        sensing_hours_per_day=veh.float("sensing_hours_per_day", 6.0, lo=0.0, hi=24.0),
-        flight_power_w=veh.float("flight_power_w", 200.0, lo=0.0, lo_open=True),
-        flight_speed_kn=veh.float("flight_speed_kn", 20.0, lo=0.0, lo_open=True),
-        solar_wh_per_day=veh.float("solar_wh_per_day", 400.0, lo=0.0),
-        max_flight_time_s=veh.float("max_flight_time_s", 120.0, lo=0.0, lo_open=True),
-        nautical_mile_m=veh.float("nautical_mile_m", 1852.0, lo=0.0, lo_open=True),
-    )
-    legs = veh.str("flight_legs", "hop", choices=("hop", "any"))
-    veh.check_unknown()
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RouteSettings:
+    """``[route]``: start and goal (m) and the goal disk's radius (m)."""
 
-    hdop_t = root.table("hdop", required=False)
-    others = target = None
-    if hdop_t.has("others_m"):
-        raw = hdop_t._get("others_m", None)
-        try:
-            others = np.asarray(raw, dtype=float).reshape(-1, 2)
-        except (TypeError, ValueError):
-            raise hdop_t.error("others_m", "must be a list of [x, y] positions") from None
-        target = hdop_t.vector("target_m", 2)
-    hdop_t.check_unknown()
+    start_m: np.ndarray
+    goal_m: np.ndarray
+    goal_tolerance_m: float
 
-    plan_t = root.table("planner", required=False)
-    planner = plan_t.str("kind", "oceanloc", choices=DRIFT_PLANNERS)
-    seed = plan_t.int("seed", 1, lo=0)
-    time_weight = plan_t.float("time_weight_wh_per_h", 0.0, lo=0.0)
-    plan_t.check_unknown()
 
-    fol_t = root.table("following", required=False)
-    following = FollowingSettings(
-        watch_circle_m=fol_t.float("watch_circle_m", 150.0, lo=0.0, lo_open=True),
-        current_scale=fol_t.float("current_scale", 1.1, lo=0.0),
-        current_rotation_rad=fol_t.float("current_rotation_deg", 5.0, lo=-180.0, hi=180.0) * DEG,
-        noise_mps=fol_t.float("noise_mps", 0.05, lo=0.0),
-        noise_correlation_s=fol_t.float("noise_correlation_s", 1800.0, lo=0.0, lo_open=True),
-        stray_m=fol_t.float("stray_m", 400.0, lo=0.0, lo_open=True),
-        max_replans=fol_t.int("max_replans", 20, lo=0),
-        runs=fol_t.int("runs", 200, lo=1),
-        seed=fol_t.int("seed", 7, lo=0),
-    )
-    fol_t.check_unknown()
-    root.check_unknown()
+def _route(t: Table) -> RouteSettings:
+    start = t.vector("start_m", 2)
+    goal = t.vector("goal_m", 2)
+    tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True)
+    t.check_unknown()
+    return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol)
 
-    for key, point in (("start_m", start), ("goal_m", goal)):
+
+def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None:
+    """Start and goal must be free states of the map."""
+    for key, point in (("start_m", route.start_m), ("goal_m", route.goal_m)):
         if not bool(obstacles.is_free(point)):
-            raise route.error(key, f"{point.tolist()} is outside the map bounds or inside an obstacle")
+            raise t.error(key, f"{point.tolist()} is outside the map bounds or inside an obstacle")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class VehicleSettings:
+    """``[vehicle]``: the energy budget (Table 1, IV.14) and the longest flight leg (m, ``None``: any)."""
+
+    energy: EnergyBudget
+    max_leg_m: float | None
+
+
+def _vehicle(t: Table) -> VehicleSettings:
+    energy = EnergyBudget(
+        base_load_w=t.float("base_load_w", 5.0, lo=0.0),
+        sensing_w=t.float("sensing_w", 10.0, lo=0.0),
+        sensing_hours_per_day=t.float("sensing_hours_per_day", 6.0, lo=0.0, hi=24.0),
+        flight_power_w=t.float("flight_power_w", 200.0, lo=0.0, lo_open=True),
+        flight_speed_kn=t.float("flight_speed_kn", 20.0, lo=0.0, lo_open=True),
+        solar_wh_per_day=t.float("solar_wh_per_day", 400.0, lo=0.0),
+        max_flight_time_s=t.float("max_flight_time_s", 120.0, lo=0.0, lo_open=True),
+        nautical_mile_m=t.float("nautical_mile_m", 1852.0, lo=0.0, lo_open=True),
+    )
+    legs = t.str("flight_legs", "hop", choices=("hop", "any"))
+    t.check_unknown()
+    return VehicleSettings(energy=energy, max_leg_m=energy.max_hop_m if legs == "hop" else None)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class HdopSettings:
+    """``[hdop]``: other flock members and the target of the HDOP term (m), or neither."""
+
+    others_m: np.ndarray | None = None
+    target_m: np.ndarray | None = None
+
+
+def _hdop(t: Table) -> HdopSettings:
+    if not t.has("others_m"):
+        t.check_unknown()
+        return HdopSettings()
+    raw = t._get("others_m", None)
+    try:
+        others = np.asarray(raw, dtype=float).reshape(-1, 2)
+    except (TypeError, ValueError):
+        raise t.error("others_m", "must be a list of [x, y] positions") from None
+    target = t.vector("target_m", 2)
+    t.check_unknown()
+    return HdopSettings(others_m=others, target_m=target)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlannerSettings:
+    """``[planner]``: default planner, its seed, and the price of time (Wh per hour)."""
+
+    planner: DriftPlannerName
+    seed: int
+    time_weight_wh_per_h: float
+
+
+def _planner_settings(t: Table) -> PlannerSettings:
+    raw = t.str("kind", "oceanloc")
+    planner = parse_planner_name(raw, t.where("kind") + ":")
+    seed = t.int("seed", 1, lo=0)
+    time_weight = t.float("time_weight_wh_per_h", 0.0, lo=0.0)
+    t.check_unknown()
+    return PlannerSettings(planner=planner, seed=seed, time_weight_wh_per_h=time_weight)
+
+
+def _following(t: Table) -> FollowingSettings:
+    following = FollowingSettings(
+        watch_circle_m=t.float("watch_circle_m", 150.0, lo=0.0, lo_open=True),
+        current_scale=t.float("current_scale", 1.1, lo=0.0),
+        current_rotation_rad=t.float("current_rotation_deg", 5.0, lo=-180.0, hi=180.0) * DEG,
+        noise_mps=t.float("noise_mps", 0.05, lo=0.0),
+        noise_correlation_s=t.float("noise_correlation_s", 1800.0, lo=0.0, lo_open=True),
+        stray_m=t.float("stray_m", 400.0, lo=0.0, lo_open=True),
+        max_replans=t.int("max_replans", 20, lo=0),
+        runs=t.int("runs", 200, lo=1),
+        seed=t.int("seed", 7, lo=0),
+    )
+    t.check_unknown()
+    return following
+
+
+def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> DriftScenario:
+    """Validate a parsed drift scenario; every error names the file, table and field.
+
+    Each table is read by its own function (``[currents]``, ``[drift]``, ``[map]``, ``[route]``,
+    ``[vehicle]``, ``[hdop]``, ``[planner]``, ``[following]``), each returning a small frozen result.
+    """
+    base = base_dir or Path.cwd()
+    head = root.table("scenario")
+    name = head.str("name")
+    description = head.str("description", "")
+    head.check_unknown()
+    cur_t = root.table("currents")
+    currents = _currents(cur_t, base)
+    cur_t.check_unknown()
+    drift = _drift_settings(root.table("drift", required=False))
+    map_ = _map_settings(root.table("map", required=False), currents)
+    route_t = root.table("route")
+    route = _route(route_t)
+    vehicle = _vehicle(root.table("vehicle", required=False))
+    hdop = _hdop(root.table("hdop", required=False))
+    planner = _planner_settings(root.table("planner", required=False))
+    following = _following(root.table("following", required=False))
+    root.check_unknown()
+    _check_route(route_t, route, map_.obstacles)
     return DriftScenario(
         name=name,
         description=description,
-        current=field_,
-        integrator=method,  # type: ignore[arg-type]
-        dt_s=dt,
-        horizon_s=horizon * 3600.0,
-        obstacles=obstacles,
-        flights_avoid_obstacles=no_fly,
-        start_m=start,
-        goal_m=goal,
-        goal_tolerance_m=tol,
-        energy=energy,
-        max_leg_m=energy.max_hop_m if legs == "hop" else None,
-        hdop_others_m=others,
-        hdop_target_m=target,
-        planner=planner,
-        seed=seed,
-        time_weight_wh_per_h=time_weight,
+        current=currents.field,
+        integrator=drift.integrator,
+        dt_s=drift.dt_s,
+        horizon_s=drift.horizon_s,
+        obstacles=map_.obstacles,
+        flights_avoid_obstacles=map_.flights_avoid_obstacles,
+        start_m=route.start_m,
+        goal_m=route.goal_m,
+        goal_tolerance_m=route.goal_tolerance_m,
+        energy=vehicle.energy,
+        max_leg_m=vehicle.max_leg_m,
+        hdop_others_m=hdop.others_m,
+        hdop_target_m=hdop.target_m,
+        planner=planner.planner,
+        seed=planner.seed,
+        time_weight_wh_per_h=planner.time_weight_wh_per_h,
         following=following,
-        projection=projection,
-        currents_description=cur_desc,
+        projection=currents.projection,
+        currents_description=currents.description,
+        data_files=currents.data_files,
     )
 
 

@@ -177,11 +177,6 @@ def concat_runs(parts: Sequence[T], *, keep: Sequence[str] = ()) -> T:
     return dataclasses.replace(first, **values)
 
 
-def concat_fields(results: Sequence[Any], names: Sequence[str]) -> dict[str, np.ndarray]:
-    """Concatenate the array attributes ``names`` of chunk results along the run axis."""
-    return {n: np.concatenate([getattr(r, n) for r in results], axis=0) for n in names}
-
-
 def resolve_workers(workers: int | None = None, scheduler: str | None = None) -> int:
     """How many workers a run will use: ``workers`` if given (at least 1), ``N`` of ``local:N``, else all
     cores; the one place the default is decided (the count a remote scheduler has is known only once

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +20,13 @@ import numpy as np
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
 from oceanloc.models.paths import DriftPath
+
+
+def safe_file_stem(name: str) -> str:
+    """``name`` (a scenario or planner name from a file) made safe as one file name: every character
+    other than letters, digits, ``.``, ``_`` and ``-`` becomes ``_`` (no folder separators, no markup)."""
+    stem = re.sub(r"[^A-Za-z0-9._-]", "_", name).strip(".")
+    return stem or "unnamed"
 
 
 def write_path_csv(path: str | Path, plan: DriftPath, projection: LocalProjection | None = None) -> Path:

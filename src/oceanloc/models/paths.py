@@ -10,6 +10,7 @@ most one hop does not merge them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -40,6 +41,15 @@ class PathEnergy:
     loads_wh: float
     net_wh: float
     duration_s: float
+
+    def to_record(self) -> dict[str, Any]:
+        return {
+            "flight_wh": self.flight_wh,
+            "solar_wh": self.solar_wh,
+            "loads_wh": self.loads_wh,
+            "net_wh": self.net_wh,
+            "duration_s": self.duration_s,
+        }
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -166,6 +176,19 @@ class DriftPath:
             net_wh=solar - flight - loads,
             duration_s=self.duration_s,
         )
+
+    def to_record(self) -> dict[str, Any]:
+        """Plain JSON-ready vertices: times (s), east/north (m), whether each edge is flown, and totals."""
+        return {
+            "t_s": self.times_s.tolist(),
+            "x_m": self.points_m[:, 0].tolist(),
+            "y_m": self.points_m[:, 1].tolist(),
+            "flight": self.flight.tolist(),
+            "flights": int(self.hops_m().shape[0]),
+            "flight_distance_m": self.flight_distance_m,
+            "drift_time_s": self.drift_time_s if self.n_points else 0.0,
+            "duration_s": self.duration_s,
+        }
 
     def position_at(self, time_s: ArrayLike) -> FloatArray:
         """Planned position at ``time_s`` (linear between vertices); ``(...) -> (..., 2)``."""

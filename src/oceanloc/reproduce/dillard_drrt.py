@@ -3,9 +3,11 @@
 Table 4 compares a single-solution DR-RRT* with an optimality-seeking one (25,000 iterations) over 1000
 runs on one random obstacle field that was then fixed; energies are the flights of the planned path,
 against 49.5 Wh for flying straight from start to goal. The thesis' field is not published, so oceanloc
-fixes one (two rectangles, ``dillard-drift-fixed``) and also reports across 20 random fields drawn by the
-thesis' own generator. Beside both DR-RRT* modes it runs oceanloc's lattice planner, and every planner's
-mean energy is also divided by the best achievable energy (:func:`best_achievable`).
+fixes one (two rectangles, ``dillard-drift-fixed``) and also reports across random fields drawn by the
+thesis' own generator (one per 50 runs, at most 20, with as many runs per planner in all as on the fixed
+field). Beside both DR-RRT* modes it runs oceanloc's lattice planner, and every planner's mean energy is
+also divided by the best achievable energy (:func:`best_achievable`). The Monte Carlo itself is
+:mod:`oceanloc.evaluation.drift`.
 
 Units follow the thesis (2000 m per nautical mile, so 20 kn = 11.1 m/s and direct flight is 49.5 Wh);
 the output says so. The published figures are not targets: run as written, the thesis' own listing saves
@@ -15,23 +17,37 @@ far more than the 22 % and 27 % it prints (about 42 % and 43 % here).
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from oceanloc._random import run_generators
-from oceanloc._typing import BoolArray, FloatArray
+from oceanloc._typing import FloatArray
 from oceanloc.config.drift import load_drift_scenario, problem_from_scenario
-from oceanloc.evaluation.montecarlo import concat_fields, run_chunked
+from oceanloc.evaluation.drift import (
+    DriftMonteCarlo,
+    FieldsSummary,
+    PlannerSummary,
+    drift_monte_carlo,
+    summarize,
+    summarize_fields,
+)
 from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions
-from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES, make_planner
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.oceanloc_planner import plan_oceanloc
+from oceanloc.planning.drift_rrt.planner import PLANNER_NAMES
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget
 from oceanloc.planning.drift_rrt.reference import REFERENCE_OPTIONS, best_achievable
 from oceanloc.planning.drift_rrt.space import DriftSpace
+from oceanloc.planning.drift_rrt.thesis import ThesisOptions, plan_thesis
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 SCENARIO = "dillard-drift-fixed"
 THESIS_DIRECT_FLIGHT_WH = 49.5
@@ -98,186 +114,144 @@ def thesis_random_obstacles(rng: np.random.Generator, problem: DriftProblem, n: 
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class PlannerRuns:
-    """Per-run outcomes of one planner.
-
-    Attributes
-    ----------
-    success : (R,) bool
-    energy_wh : (R,) float
-        Flight energy of the plan (``NaN`` when it failed).
-    compute_s : (R,) float
-        Wall-clock planning time.
-    field : (R,) int
-        Obstacle field of each run (0 for the fixed field).
-    """
-
-    success: BoolArray
-    energy_wh: FloatArray
-    compute_s: FloatArray
-    field: np.ndarray
-
-
-@dataclass(frozen=True, slots=True)
-class _PlanTask:
-    """Picklable Monte Carlo task: ``planner`` on the problems, run ``r`` on field ``r % len(problems)``."""
-
-    planner: str
-    problems: tuple[DriftProblem, ...]
-    seed: int
-    iterations: int | None
-
-    def __call__(self, run_indices: np.ndarray) -> PlannerRuns:
-        plan = make_planner(self.planner, self.iterations)
-        rngs = run_generators(self.seed, run_indices)
-        ok, energy, compute, fields = [], [], [], []
-        for r, rng in zip(run_indices, rngs, strict=True):
-            f = int(r) % len(self.problems)
-            res = plan(self.problems[f], rng)
-            ok.append(res.success)
-            energy.append(res.flight_energy_wh if res.success else np.nan)
-            compute.append(res.compute_s)
-            fields.append(f)
-        return PlannerRuns(
-            success=np.asarray(ok, dtype=bool),
-            energy_wh=np.asarray(energy),
-            compute_s=np.asarray(compute),
-            field=np.asarray(fields, dtype=np.int64),
-        )
-
-
-def run_planner(
-    planner: str,
-    problems: Sequence[DriftProblem],
-    runs: int,
-    seed: int,
-    *,
-    iterations: int | None = None,
-    executor: Executor | None = None,
-    progress: Callable[[int], None] | None = None,
-) -> PlannerRuns:
-    """Monte Carlo of one planner; run ``r`` uses problem ``r % len(problems)``, generator ``(seed, r)``."""
-    task = _PlanTask(planner, tuple(problems), seed, iterations)
-    chunks = run_chunked(task, runs, executor=executor, progress=progress)
-    cols = concat_fields(chunks, ("success", "energy_wh", "compute_s", "field"))
-    return PlannerRuns(**cols)
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class PlannerSummary:
-    """Table 4 statistics of one planner (energies in Wh, saving as a fraction of direct flight)."""
-
-    success_rate: float
-    energy_wh_mean: float
-    energy_wh_std: float
-    saving_mean: float
-    compute_s_median: float
-    compute_s_mean: float
-    ratio_to_best: float
-
-    def as_json(self) -> dict[str, float]:
-        return {
-            "success_rate": self.success_rate,
-            "energy_wh_mean": self.energy_wh_mean,
-            "energy_wh_std": self.energy_wh_std,
-            "saving_mean": self.saving_mean,
-            "compute_s_median": self.compute_s_median,
-        }
-
-
-def summarize(runs: PlannerRuns, direct_wh: float, best_wh: float) -> PlannerSummary:
-    """Success rate, mean and std of energy over successful runs, mean saving, compute time."""
-    e = runs.energy_wh[runs.success]
-    mean = float(np.mean(e)) if e.size else float("nan")
-    return PlannerSummary(
-        success_rate=float(np.mean(runs.success)),
-        energy_wh_mean=mean,
-        energy_wh_std=float(np.std(e, ddof=1)) if e.size > 1 else float("nan"),
-        saving_mean=float(np.mean(1.0 - e / direct_wh)) if e.size else float("nan"),
-        compute_s_median=float(np.median(runs.compute_s)),
-        compute_s_mean=float(np.mean(runs.compute_s)),
-        ratio_to_best=mean / best_wh,
-    )
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class FieldsSummary:
-    """One planner across random fields: pooled success rate, and per-field mean savings and ratios."""
-
-    success_rate: float
-    saving_mean: float
-    saving_min_field: float
-    ratio_to_best_mean: float
-    compute_s_median: float
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
 class DillardReport:
     """Everything ``oceanloc reproduce dillard-drrt`` prints and writes.
 
     Attributes
     ----------
+    runs : int
+        Runs per planner on the fixed field, and in all across the random fields.
+    seed : int
+    iterations : int
+        Iteration budget of the optimality-seeking DR-RRT*.
     direct_flight_wh : float
         Direct flight on the fixed field, Wh (thesis units).
     best_achievable_wh : float
-        Reference energy on the fixed field.
+        Reference energy on the fixed field, Wh.
     planners : dict of str to PlannerSummary
         Fixed-field statistics per planner.
-    runs : dict of str to PlannerRuns
-        Per-run outcomes on the fixed field (for figures).
+    fixed : DriftMonteCarlo
+        Per-run outcomes on the fixed field (for figures and NetCDF).
     fields : dict of str to FieldsSummary
         Random-field statistics per planner (empty when no random fields were asked for).
+    random_fields : DriftMonteCarlo or None
+        Per-run outcomes across the random fields.
     field_best_wh : (F,) float
-        Reference energy of each random field.
+        Reference energy of each random field, Wh.
     convention : str
         Unit convention of every energy.
-    reference : PlanResult
+    reference : DriftPlanResult
         The reference plan on the fixed field.
+    reference_options, field_reference_options : LatticeOptions
+        Lattices of the fixed-field and the random-field references.
     """
 
+    runs: int
+    seed: int
+    iterations: int
     direct_flight_wh: float
     best_achievable_wh: float
     planners: dict[str, PlannerSummary]
-    runs: dict[str, PlannerRuns]
+    fixed: DriftMonteCarlo
     fields: dict[str, FieldsSummary]
+    random_fields: DriftMonteCarlo | None
     field_best_wh: FloatArray
     convention: str
-    reference: PlanResult
+    reference: DriftPlanResult
     reference_options: LatticeOptions
+    field_reference_options: LatticeOptions
 
-    def as_json(self) -> dict:
-        """The ``--json`` payload, ``{direct_flight_wh, planners: {name: {...}}, best_achievable_wh}``."""
+    def to_record(self) -> dict[str, Any]:
+        """``{direct_flight_wh, planners: {name: {...}}, best_achievable_wh}`` (the shape of the issue that
+        asked for it), plus the run counts, the random-field summaries and the unit convention."""
         return {
             "direct_flight_wh": self.direct_flight_wh,
-            "planners": {name: s.as_json() for name, s in self.planners.items()},
+            "planners": {name: s.to_record() for name, s in self.planners.items()},
             "best_achievable_wh": self.best_achievable_wh,
+            "runs": self.runs,
+            "seed": self.seed,
+            "iterations": self.iterations,
+            "convention": self.convention,
+            "random_fields": {
+                "fields": int(self.field_best_wh.size),
+                "runs_per_planner": 0 if self.random_fields is None else self.random_fields.n_runs,
+                "best_achievable_wh": self.field_best_wh.tolist(),
+                "planners": {name: s.to_record() for name, s in self.fields.items()},
+            },
         }
+
+    def to_dataset(self) -> xr.Dataset:
+        """Per-run outcomes: ``(planner, run)`` on the fixed field and ``(planner, field_run)`` across the
+        random fields (``field_problem`` says which field), with the references and the thesis' values."""
+        ds = self.fixed.to_dataset()
+        ds["best_achievable_energy"] = (
+            (),
+            self.best_achievable_wh,
+            {"units": "W h", "long_name": "best achievable flight energy on the fixed field"},
+        )
+        if self.random_fields is not None:
+            ds = ds.merge(self.random_fields.to_dataset(prefix="field_"), combine_attrs="override")
+            ds["field_best_achievable_energy"] = (
+                ("field_problem_index",),
+                self.field_best_wh,
+                {"units": "W h", "long_name": "best achievable flight energy of each random field"},
+            )
+        ds.attrs = {
+            "title": "DR-RRT* Monte Carlo (Dillard, AquaQuad thesis, Table 4) with oceanloc's planner",
+            "energy_convention": self.convention,
+            "optimality_seeking_iterations": int(self.iterations),
+        }
+        return ds
+
+
+RUNS_PER_FIELD = 50
+"""Default random-field study: one field per 50 runs (20 fields at the thesis' 1000 runs)."""
+MAX_FIELDS = 20
+
+
+def default_fields(runs: int) -> int:
+    """Random fields when none are asked for: ``ceil(runs / 50)``, at most 20, so the study's lattice
+    references (one per field) scale with ``runs`` like everything else."""
+    return min(MAX_FIELDS, max(1, math.ceil(runs / RUNS_PER_FIELD)))
+
+
+def planned_runs(runs: int, fields: int | None = None, planners: int = len(PLANNER_NAMES)) -> int:
+    """Planner runs :func:`reproduce_dillard_drrt` makes: ``runs`` per planner on the fixed field and, with
+    random fields, ``runs`` per planner across them (what its progress counts)."""
+    n_fields = default_fields(runs) if fields is None else fields
+    return planners * runs * (2 if n_fields > 0 else 1)
+
+
+def random_fields(problem: DriftProblem, fields: int, seed: int) -> list[DriftProblem]:
+    """``fields`` problems on obstacles drawn by the thesis' generator from generators ``(seed, f)``."""
+    return [thesis_problem(thesis_random_obstacles(g, problem)) for g in run_generators(seed, range(fields))]
 
 
 def reproduce_dillard_drrt(
     runs: int = 1000,
     seed: int = 2014,
     *,
-    fields: int = 20,
-    field_runs: int = 10,
+    fields: int | None = None,
     iterations: int = 25_000,
     reference_spacing_m: float = REFERENCE_OPTIONS.spacing_m,
     executor: Executor | None = None,
-    progress: Callable[[str, int, int], None] | None = None,
+    progress: Callable[[int], None] | None = None,
+    note: Callable[[str], None] | None = None,
 ) -> DillardReport:
     """Run the three planners on the fixed field and across random fields.
 
     Parameters
     ----------
     runs : int
-        Monte Carlo runs per planner on the fixed field (1000 in the thesis).
+        Monte Carlo runs per planner on the fixed field (1000 in the thesis), and per planner in all across
+        the random fields (run ``r`` on field ``r % fields``), so every part scales with ``runs``.
     seed : int
-        Master seed; run ``r`` of every planner uses generator ``(seed, r)``; random fields use
-        ``(seed + 1, f)``.
-    fields : int
-        Random fields drawn by the thesis' generator (0 to skip).
-    field_runs : int
-        Runs per planner and random field.
+        Master seed; fixed-field run ``r`` of every planner uses generator ``(seed, r)``; random fields are
+        drawn with ``(seed + 1, f)`` and their runs use ``(seed + 2, r)``.
+    fields : int, optional
+        Random fields drawn by the thesis' generator (0 to skip; at most ``runs`` are used, so every field
+        gets at least one run per planner); default :func:`default_fields` (one per 50 runs, at most 20).
+        Each field costs one best-achievable lattice solve.
     iterations : int
         Iteration budget of the optimality-seeking mode (25,000 in the thesis).
     reference_spacing_m : float
@@ -286,90 +260,94 @@ def reproduce_dillard_drrt(
     executor : Executor, optional
         Where runs go (local processes, Dask); in this process if ``None``.
     progress : callable, optional
-        ``progress(stage, done, total)``.
+        ``progress(n)`` with the number of planner runs just finished (:func:`planned_runs` in all).
+    note : callable, optional
+        ``note(text)`` with a line on each stage that is not planner runs (the reference lattices).
     """
+    say = note or (lambda _text: None)
     problem = thesis_problem()
-    direct = problem.direct_flight_wh
-
-    def tick(stage: str, total: int) -> Callable[[int], None]:
-        done = [0]
-
-        def advance(n: int) -> None:
-            done[0] += n
-            if progress:
-                progress(stage, done[0], total)
-
-        return advance
-
-    tic = time.perf_counter()
     ref_options = dataclasses.replace(REFERENCE_OPTIONS, spacing_m=reference_spacing_m)
     field_options = dataclasses.replace(
         REFERENCE_OPTIONS, spacing_m=max(2.0 * reference_spacing_m, FIELD_REFERENCE_OPTIONS.spacing_m)
     )
+    tic = time.perf_counter()
     reference = best_achievable(problem, ref_options)
     best = reference.flight_energy_wh
-    if progress:
-        progress(f"best achievable ({time.perf_counter() - tic:.0f} s)", 1, 1)
-    per_planner: dict[str, PlannerRuns] = {}
-    summaries: dict[str, PlannerSummary] = {}
-    for name in PLANNER_NAMES:
-        its = iterations if name == "thesis-optimality-seeking" else None
-        res = run_planner(
-            name, [problem], runs, seed, iterations=its, executor=executor, progress=tick(name, runs)
-        )
-        per_planner[name] = res
-        summaries[name] = summarize(res, direct, best)
+    say(f"best achievable on the fixed field: {best:.2f} Wh ({time.perf_counter() - tic:.0f} s)")
+    fixed = drift_monte_carlo(
+        [problem], runs, seed, iterations=iterations, executor=executor, progress=progress
+    )
+    summaries = {name: summarize(r, problem.direct_flight_wh, best) for name, r in fixed.runs.items()}
+    n_fields = min(default_fields(runs) if fields is None else fields, runs)
     field_summaries: dict[str, FieldsSummary] = {}
     field_best = np.zeros(0)
-    if fields > 0:
-        rngs = run_generators(seed + 1, range(fields))
-        problems = [thesis_problem(thesis_random_obstacles(g, problem)) for g in rngs]
-        advance = tick("random-field references", fields)
-        field_best_list = []
-        for p in problems:
-            field_best_list.append(best_achievable(p, field_options).flight_energy_wh)
-            advance(1)
-        field_best = np.asarray(field_best_list)
-        for name in PLANNER_NAMES:
-            its = iterations if name == "thesis-optimality-seeking" else None
-            total = fields * field_runs
-            res = run_planner(
-                name,
-                problems,
-                total,
-                seed + 2,
-                iterations=its,
-                executor=executor,
-                progress=tick(f"{name} (random fields)", total),
-            )
-            field_summaries[name] = _fields_summary(res, problems, field_best)
+    field_mc = None
+    if n_fields > 0:
+        problems = random_fields(problem, n_fields, seed + 1)
+        tic = time.perf_counter()
+        field_best = np.asarray([best_achievable(p, field_options).flight_energy_wh for p in problems])
+        plural = "s" if n_fields != 1 else ""
+        say(f"best achievable on {n_fields} random field{plural} ({time.perf_counter() - tic:.0f} s)")
+        field_mc = drift_monte_carlo(
+            problems, runs, seed + 2, iterations=iterations, executor=executor, progress=progress
+        )
+        field_summaries = {
+            name: summarize_fields(r, field_mc.direct_flight_wh, field_best)
+            for name, r in field_mc.runs.items()
+        }
     return DillardReport(
-        direct_flight_wh=direct,
+        runs=runs,
+        seed=seed,
+        iterations=iterations,
+        direct_flight_wh=problem.direct_flight_wh,
         best_achievable_wh=best,
         planners=summaries,
-        runs=per_planner,
+        fixed=fixed,
         fields=field_summaries,
+        random_fields=field_mc,
         field_best_wh=field_best,
         convention=problem.energy.convention,
         reference=reference,
         reference_options=ref_options,
+        field_reference_options=field_options,
     )
 
 
-def _fields_summary(res: PlannerRuns, problems: Sequence[DriftProblem], best: FloatArray) -> FieldsSummary:
-    savings, ratios = [], []
-    for f, p in enumerate(problems):
-        m = (res.field == f) & res.success
-        if m.any():
-            e = res.energy_wh[m]
-            savings.append(float(np.mean(1.0 - e / p.direct_flight_wh)))
-            ratios.append(float(np.mean(e) / best[f]))
-    return FieldsSummary(
-        success_rate=float(np.mean(res.success)),
-        saving_mean=float(np.mean(savings)) if savings else float("nan"),
-        saving_min_field=float(np.min(savings)) if savings else float("nan"),
-        ratio_to_best_mean=float(np.mean(ratios)) if ratios else float("nan"),
-        compute_s_median=float(np.median(res.compute_s)),
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DillardSamplePlans:
+    """One plan of each planner on the fixed field, with the DR-RRT* trees (for the figures).
+
+    Attributes
+    ----------
+    problem : DriftProblem
+    single, optimality_seeking : DriftPlanResult
+        DR-RRT* in both modes, trees kept.
+    oceanloc : DriftPlanResult
+    iterations : int
+    """
+
+    problem: DriftProblem
+    single: DriftPlanResult
+    optimality_seeking: DriftPlanResult
+    oceanloc: DriftPlanResult
+    iterations: int
+
+
+def sample_plans(seed: int, iterations: int = 25_000) -> DillardSamplePlans:
+    """Run 0 of every planner on the fixed field (generator ``(seed, 0)``), trees kept."""
+    problem = thesis_problem()
+    single = plan_thesis(
+        problem, run_generators(seed, [0])[0], options=ThesisOptions(mode="single", keep_tree=True)
+    )
+    optimal = plan_thesis(
+        problem,
+        run_generators(seed, [0])[0],
+        PlanBudget(max_iterations=iterations),
+        ThesisOptions(mode="optimality-seeking", keep_tree=True),
+    )
+    ours = plan_oceanloc(problem, run_generators(seed, [0])[0])
+    return DillardSamplePlans(
+        problem=problem, single=single, optimality_seeking=optimal, oceanloc=ours, iterations=iterations
     )
 
 

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem
 from oceanloc.sim.path_following import Replanner
 
 
@@ -25,14 +26,25 @@ class SwapResult:
     ----------
     problems : tuple of DriftProblem
         Drifter 1 (start -> goal) and drifter 2 (goal -> start).
-    results : tuple of PlanResult
+    results : tuple of DriftPlanResult
     min_separation_m : float
         Closest approach of the two planned schedules (``inf`` if a plan failed).
     """
 
     problems: tuple[DriftProblem, DriftProblem]
-    results: tuple[PlanResult, PlanResult]
+    results: tuple[DriftPlanResult, DriftPlanResult]
     min_separation_m: float
+
+    def to_record(self) -> dict[str, Any]:
+        """Both drifters' start, goal (m) and plan, and the closest approach (m; ``None`` if a plan
+        failed)."""
+        return {
+            "min_separation_m": self.min_separation_m,
+            "drifters": [
+                {"start_m": p.start_m.tolist(), "goal_m": p.goal_m.tolist(), "plan": r.to_record()}
+                for p, r in zip(self.problems, self.results, strict=True)
+            ],
+        }
 
 
 def swap_positions(

@@ -48,7 +48,7 @@ from oceanloc.planning.drift_rrt.lattice_values import (
     legs_objective,
     sample_drift,
 )
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult, PlanStatus
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget, PlanStatus
 
 __all__ = ["EnvelopeKind", "LatticeOptions", "objective", "plan_lattice"]
 
@@ -82,7 +82,7 @@ def plan_lattice(
     rng: np.random.Generator,
     budget: PlanBudget | None = None,
     options: LatticeOptions | None = None,
-) -> PlanResult:
+) -> DriftPlanResult:
     """Plan with the drift/hop lattice search (see the module docstring).
 
     Parameters
@@ -96,14 +96,14 @@ def plan_lattice(
 
     Returns
     -------
-    PlanResult
+    DriftPlanResult
     """
     opts = options or LatticeOptions()
     tic = time.perf_counter()
     direct = problem.direct_flight_wh
     invalid = problem.validate_endpoints()
     if invalid is not None:
-        return PlanResult(
+        return DriftPlanResult(
             status=PlanStatus.FAILED,
             path=None,
             flight_energy_wh=math.inf,
@@ -119,7 +119,7 @@ def plan_lattice(
     start = points.shape[0] - 1
     legs = extract_plan(lattice, traj, start, traj, opts.max_flights)
     if legs is None:
-        return PlanResult(
+        return DriftPlanResult(
             status=PlanStatus.FAILED,
             path=None,
             flight_energy_wh=math.inf,
@@ -150,7 +150,7 @@ def plan_lattice(
     best_path = _build_path(problem, legs)
     ok = _reaches(problem, best_path)
     energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
-    return PlanResult(
+    return DriftPlanResult(
         status=PlanStatus.EXACT if ok else PlanStatus.APPROXIMATE,
         path=best_path,
         flight_energy_wh=energy,

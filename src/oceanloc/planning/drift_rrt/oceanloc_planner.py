@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions, plan_lattice
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanBudget, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget
 
 DEFAULT_OPTIONS = LatticeOptions(
     spacing_m=300.0, stride=4, envelope="dense", refine_rounds=1, cloud_half_width=4
@@ -29,6 +29,6 @@ def plan_oceanloc(
     rng: np.random.Generator,
     budget: PlanBudget | None = None,
     options: LatticeOptions | None = None,
-) -> PlanResult:
+) -> DriftPlanResult:
     """Plan with the oceanloc lattice planner (``DEFAULT_OPTIONS`` unless ``options`` are given)."""
     return plan_lattice(problem, rng, budget, options or DEFAULT_OPTIONS)

@@ -2,12 +2,13 @@
 
 A :class:`DriftProblem` bundles the space (bounds, obstacles), the propagator (current field and
 integrator), start, goal disk, the vehicle's energy budget (flight speed, power, longest hop) and the
-optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> PlanResult``.
+optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> DriftPlanResult``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -147,7 +148,7 @@ class SearchTree:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class PlanResult:
+class DriftPlanResult:
     """What a planner returns.
 
     Attributes
@@ -193,3 +194,20 @@ class PlanResult:
         if not self.success:
             return float("nan")
         return 1.0 - self.flight_energy_wh / self.direct_flight_wh
+
+    def to_record(self) -> dict[str, Any]:
+        """Plain JSON-ready outcome: status, energies (Wh), saving, compute time (s) and the path's vertices
+        (the search tree is left out: it is for figures)."""
+        return {
+            "status": self.status.value,
+            "message": self.message,
+            "flight_energy_wh": self.flight_energy_wh if self.path is not None else None,
+            "direct_flight_wh": self.direct_flight_wh,
+            "saving": self.saving if self.success else None,
+            "compute_s": self.compute_s,
+            "iterations": self.iterations,
+            "solutions": self.solutions,
+            "cost": self.cost,
+            "tree_nodes": None if self.tree is None else int(self.tree.parent.size),
+            "path": None if self.path is None else self.path.to_record(),
+        }

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from oceanloc.planning.drift_rrt.lattice import LatticeOptions, plan_lattice
-from oceanloc.planning.drift_rrt.problem import DriftProblem, PlanResult
+from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem
 
 REFERENCE_OPTIONS = LatticeOptions(
     spacing_m=50.0,
@@ -28,7 +28,7 @@ REFERENCE_OPTIONS = LatticeOptions(
 )
 
 
-def best_achievable(problem: DriftProblem, options: LatticeOptions | None = None) -> PlanResult:
+def best_achievable(problem: DriftProblem, options: LatticeOptions | None = None) -> DriftPlanResult:
     """Plan with the fine reference lattice (deterministic: no random offset).
 
     Parameters

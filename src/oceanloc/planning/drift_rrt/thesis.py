@@ -43,9 +43,9 @@ from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.nearest import GrowingNearest
 from oceanloc.planning.drift_rrt.objective import ThesisCost
 from oceanloc.planning.drift_rrt.problem import (
+    DriftPlanResult,
     DriftProblem,
     PlanBudget,
-    PlanResult,
     PlanStatus,
     SearchTree,
 )
@@ -115,7 +115,7 @@ def plan_thesis(
     rng: np.random.Generator,
     budget: PlanBudget | None = None,
     options: ThesisOptions | None = None,
-) -> PlanResult:
+) -> DriftPlanResult:
     """Run DR-RRT* on ``problem``.
 
     Parameters
@@ -130,7 +130,7 @@ def plan_thesis(
 
     Returns
     -------
-    PlanResult
+    DriftPlanResult
         EXACT with the (cheapest) solution path; APPROXIMATE with the path to the node closest to the goal
         when the budget runs out first; FAILED if the start is invalid.
     """
@@ -142,7 +142,7 @@ def plan_thesis(
     direct = problem.direct_flight_wh
     invalid = problem.validate_endpoints()
     if invalid is not None:
-        return PlanResult(
+        return DriftPlanResult(
             status=PlanStatus.FAILED,
             path=None,
             flight_energy_wh=math.inf,
@@ -253,7 +253,7 @@ class _DrRrtStar:
             stack.extend(children[q])
 
     # -- the loop ---------------------------------------------------------------------------------------
-    def run(self) -> PlanResult:
+    def run(self) -> DriftPlanResult:
         p, o = self.p, self.opts
         gx, gy = (float(v) for v in p.goal_m)
         tol = p.goal_tolerance_m
@@ -400,7 +400,7 @@ class _DrRrtStar:
         closest: int,
         iterations: int,
         solutions: int,
-    ) -> PlanResult:
+    ) -> DriftPlanResult:
         """The cheapest solution as it was when found (later rewiring may change the tree behind it)."""
         elapsed = time.perf_counter() - self.tic
         self._evaluate_pending()
@@ -414,7 +414,7 @@ class _DrRrtStar:
                 branch_cost=np.asarray(self.branch),
             )
         if best is not None:
-            return PlanResult(
+            return DriftPlanResult(
                 status=PlanStatus.EXACT,
                 path=best,
                 flight_energy_wh=best_wh,
@@ -427,7 +427,7 @@ class _DrRrtStar:
                 message=f"{solutions} solution(s) in {iterations} iterations, {len(self.X)} nodes",
             )
         path = self._path(closest)
-        return PlanResult(
+        return DriftPlanResult(
             status=PlanStatus.APPROXIMATE,
             path=path,
             flight_energy_wh=float(self.p.energy.flight_energy_wh(path.flight_distance_m)),
