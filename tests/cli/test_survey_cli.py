@@ -8,7 +8,7 @@ from oceanloc.cli.app import app, main
 def test_demo_prints_the_table_and_writes_the_trajectory(tmp_path):
     result = CliRunner().invoke(app, ["demo", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert "After 50 epochs" in result.output and "Error and D-optimal value by epoch" in result.output
+    assert "after 50 epochs" in result.output and "Error and D-optimal value by epoch" in result.output
     assert "NEES at n = 50" in result.output
     assert (tmp_path / "garcia2019-m4_trajectory.png").stat().st_size > 10_000
 
