@@ -323,6 +323,6 @@ def planners_dataset(groups: Mapping[str, Sequence[SurveyMonteCarlo]]) -> xr.Dat
             | {v: f"{group}_{v}" for v in stacked.data_vars}
         )
         parts.append(stacked)
-    merged = xr.merge(parts, combine_attrs="drop")
+    merged = xr.merge(parts, combine_attrs="override")
     merged.attrs = {"title": "survey Monte Carlos by planner", "groups": ", ".join(groups)}
     return merged

@@ -44,7 +44,7 @@ def estimates_figure(
     ax.plot(*truth_en_m, "r*", ms=12, label="true E-N position")
     ax.plot(*fitted.points().T, "b-", label="estimated 95% confidence (fitted)")
     ax.plot(*actual.points().T, "k--", label="actual 95% confidence (eq. 22)")
-    ax.set(xlabel="east [m]", ylabel="north [m]", title="MAP estimates after N = 4 ranges")
+    ax.set(xlabel="east (m)", ylabel="north (m)", title="MAP estimates after N = 4 ranges")
     ax.axis("equal")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     save_figure(fig, path)
@@ -56,10 +56,13 @@ def nees_figure(nees: FloatArray, dof: int, path: Path, title: str) -> Figure:
     fig = Figure(figsize=(6, 4))
     ax = fig.add_subplot()
     top = float(np.percentile(nees, 99.5))
-    ax.hist(nees, bins=40, range=(0, top), density=True, alpha=0.6, label="NEES (eq. 44)")
+    bins = int(np.clip(2.0 * np.sqrt(nees.size), 8, 40))  # about 2 sqrt(R) bins: no gaps at 50 runs
+    ax.hist(
+        nees, bins=bins, range=(0, top), density=True, alpha=0.6, label=f"NEES (eq. 44), {nees.size} runs"
+    )
     x = np.linspace(0, top, 300)
     ax.plot(x, stats.chi2(dof).pdf(x), color="tab:orange", lw=2, label=f"chi-square pdf, {dof} dof")
-    ax.set(xlabel="NEES", ylabel="density", title=title)
+    ax.set(xlabel="NEES (1)", ylabel="probability density (1)", title=title)
     ax.legend()
     save_figure(fig, path)
     return fig
@@ -183,16 +186,28 @@ def major_axis_figure(
     axis = np.linalg.eigh(cov_en_m2)[1][:, -1]
     span = 1.1 * float(np.max(np.linalg.norm(planned_en_m - estimate_en_m, axis=1)))
     line = estimate_en_m + np.outer(np.linspace(-span, span, 2), axis)
-    ax.plot(line[:, 0], line[:, 1], "--", color="tab:purple", label="major axis of the error ellipse")
     ell = confidence_ellipse(estimate_en_m, cov_en_m2, 0.95)
-    scale = span / max(float(ell.semi_major_m), 1e-12) * 0.3
-    shape = confidence_ellipse(estimate_en_m, cov_en_m2 * scale**2, 0.95)
-    ax.plot(*shape.points().T, color="tab:purple", lw=1, label="error ellipse (shape, scaled)")
-    sc = ax.scatter(planned_en_m[:, 0], planned_en_m[:, 1], c=reaches_m, marker="D", s=25, cmap="viridis")
-    fig.colorbar(sc, ax=ax, label="reach [m]")
+    axes_text = f"{float(ell.semi_major_m):.1f} x {float(ell.semi_minor_m):.2f} m"
+    ax.plot(
+        line[:, 0],
+        line[:, 1],
+        "--",
+        color="tab:purple",
+        label=f"major axis of the 95 % error ellipse ({axes_text})",
+    )
+    sc = ax.scatter(
+        planned_en_m[:, 0],
+        planned_en_m[:, 1],
+        c=reaches_m,
+        marker="D",
+        s=25,
+        cmap="viridis",
+        label="planned p_V(2)",
+    )
+    fig.colorbar(sc, ax=ax, label="reach per epoch (m)")
     ax.plot(*start_en_m, "r*", ms=12, label="p_V(1)")
     ax.plot(*estimate_en_m, "k^", ms=8, label="transponder estimate")
-    ax.set(xlabel="east [m]", ylabel="north [m]", title=title)
+    ax.set(xlabel="east (m)", ylabel="north (m)", title=title)
     ax.axis("equal")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

@@ -30,21 +30,21 @@ def _triple(v: np.ndarray) -> str:
 
 
 def single_survey_table(survey: SingleSurvey) -> Table:
-    """Each transponder's truth, final estimate, error and 95 % ellipse after one survey."""
+    """Each transponder's truth, final estimate, error, 95 % horizontal ellipse (semi-axes and the major
+    axis' direction counter-clockwise from east) and vertical standard deviation after one survey."""
     scen, ell = survey.scenario, survey.ellipses
     label = escape(site_planner_label(scen.planner))
     title = f"{escape(scen.name)}: after {scen.epochs} epochs (planner {label}, seed {survey.seed})"
     table = Table(title=title)
     for col in (
         "m",
-        "truth E, N, U (m)",
-        "estimate E, N, U (m)",
+        "truth E,N,U (m)",
+        "estimate E,N,U (m)",
         "error (m)",
-        "95% ellipse a x b (m)",
-        "dir (deg)",
-        "1-sigma U (m)",
+        "95% a x b (m) @ deg",
+        "sd U (m)",
     ):
-        table.add_column(col, justify="right")
+        table.add_column(col, justify="right", no_wrap=True)
     errors = survey.error_norm_m[-1]
     for m in range(scen.n_transponders):
         table.add_row(
@@ -52,8 +52,7 @@ def single_survey_table(survey: SingleSurvey) -> Table:
             _triple(scen.transponders_enu_m[m]),
             _triple(survey.final_estimates_m[m]),
             f"{errors[m]:.3f}",
-            f"{ell.semi_major_m[m]:.3f} x {ell.semi_minor_m[m]:.3f}",
-            f"{np.degrees(ell.angle_rad[m]):+.0f}",
+            f"{ell.semi_major_m[m]:.3f} x {ell.semi_minor_m[m]:.3f} @ {np.degrees(ell.angle_rad[m]):+.0f}",
             f"{survey.sigma_up_m[m]:.3f}",
         )
     return table
@@ -94,15 +93,17 @@ def monte_carlo_table(result: SurveyMonteCarlo) -> Table:
     """RMSEE per transponder, log det mean and std, and NEES consistency at the tabulated epochs."""
     scen, cons = result.scenario, result.consistency
     label = escape(site_planner_label(scen.planner))
-    table = Table(title=f"{escape(scen.name)}: {result.runs} runs, planner {label}, seed {result.seed}")
+    title = f"{escape(scen.name)}: {result.runs} runs, planner {label}, seed {result.seed}"
+    title += f"; NEES vs chi2({cons.dof})"
+    table = Table(title=title)
     table.add_column("epoch n", justify="right")
     for m in range(scen.n_transponders):
         table.add_column(f"RMSEE m={m + 1} (m)", justify="right")
     for col in (
         "log det mean (nats)",
         "log det std (nats)",
-        f"mean NEES (1, chi2 {cons.dof})",
-        "NEES > q95 (%)",
+        "mean NEES (1)",
+        "> chi2 q95 (%)",
     ):
         table.add_column(col, justify="right")
     for n in report_epochs(scen.epochs):
