@@ -118,15 +118,15 @@ class SurveyMonteCarlo:
             "logdet_std": self.log_det.std.tolist(),
             "nees": {
                 "epoch": self.scenario.epochs,
-                "mean": c.mean,
-                "dof": c.dof,
-                "mean_band": list(c.mean_band),
-                "mean_within_band": c.mean_within_band,
-                "p_value": c.p_value,
+                "mean": float(c.mean),
+                "dof": int(c.dof),
+                "mean_band": [float(v) for v in c.mean_band],
+                "mean_within_band": bool(c.mean_within_band),
+                "p_value": float(c.p_value),
             },
             "consistency_by_epoch": self.consistency.to_record(),
-            "plan_time_s": self.plan_time_s,
-            "converged_fraction": self.converged_fraction,
+            "plan_time_s": float(self.plan_time_s),
+            "converged_fraction": float(self.converged_fraction),
         }
 
     def to_dataset(self) -> xr.Dataset:

@@ -85,7 +85,7 @@ class Check:
     detail: str
 
     def to_record(self) -> dict[str, Any]:
-        return {"name": self.name, "passed": self.passed, "detail": self.detail}
+        return {"name": self.name, "passed": bool(self.passed), "detail": self.detail}
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
