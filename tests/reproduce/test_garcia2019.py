@@ -1,3 +1,5 @@
+import json
+
 import numpy as np
 import pytest
 
@@ -46,6 +48,7 @@ def test_fig5_and_fig53_planned_points_converge_onto_the_major_axis():
 def test_greedy_reproduction_json():
     result = garcia2018.reproduce_garcia2018_greedy(runs=4, seed=2)
     record = result.to_record()
+    json.dumps(record, allow_nan=False)  # plain JSON
     assert set(record["tables"]) == {"5.3", "5.7"}
     assert set(record["studies"]["M4"]) == {"random-disk", "greedy"}
     # One verdict per (table, planner) and one for Fig. 5.3; the record never claims success beside a

@@ -181,7 +181,7 @@ def major_axis_figure(
 ) -> Figure:
     """Journal Fig. 5 / thesis Fig. 5.3: planned next sites as the reach grows, with the error ellipse's
     major axis (the least-informed direction) through the estimate."""
-    fig = Figure(figsize=(7, 6.5))
+    fig = Figure(figsize=(7, 7.5), layout="constrained")
     ax = fig.add_subplot()
     axis = np.linalg.eigh(cov_en_m2)[1][:, -1]
     span = 1.1 * float(np.max(np.linalg.norm(planned_en_m - estimate_en_m, axis=1)))
@@ -210,7 +210,7 @@ def major_axis_figure(
     ax.set(xlabel="east (m)", ylabel="north (m)", title=title)
     ax.axis("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=8)
     save_figure(fig, path)
     return fig
 
