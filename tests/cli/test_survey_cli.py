@@ -1,5 +1,6 @@
 import json
 
+import pytest
 from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
@@ -81,18 +82,22 @@ def _oceanloc(*args):
     )
 
 
-def test_usage_errors_of_the_survey_commands_exit_2_with_one_line():
-    for args, reason in (
+@pytest.mark.parametrize(
+    ("args", "reason"),
+    [
         (
             ("simulate", "survey", "--scenario", "garcia2019-m1", "--planner", "best"),
             "unknown planner 'best'",
         ),
         (("scenarios", "show", "nope"), "'nope' is neither a scenario file nor a built-in scenario"),
         (("reproduce", "garcia2019", "--horizons", "0,x"), "--horizons must be comma-separated integers"),
-    ):
-        proc = _oceanloc(*args)
-        assert proc.returncode == 2, proc.stderr
-        assert reason in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+    ],
+)
+def test_usage_errors_of_the_survey_commands_exit_2_with_one_line(args, reason):
+    proc = _oceanloc(*args)
+    assert proc.returncode == 2, proc.stderr
+    assert reason in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+    assert proc.stderr.count("error:") == 1 and proc.stderr.startswith("error:")  # one reason
 
 
 def test_simulate_survey_netcdf_and_json_carry_the_scenario_hash(tmp_path):
