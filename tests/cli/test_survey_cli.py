@@ -138,3 +138,26 @@ def test_scenarios_list_shows_every_kind():
     assert result.exit_code == 0, result.output
     for name in ("garcia2019-m4", "dillard-lab-tdoa", "dillard-drift-swap"):
         assert name in result.output
+
+
+def test_reproduce_garcia2018_prints_what_does_not_reproduce(tmp_path):
+    args = [
+        "reproduce",
+        "garcia2018-greedy",
+        "--runs",
+        "3",
+        "--workers",
+        "1",
+        "--json",
+        str(tmp_path / "g.json"),
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "Which thesis tables and figures reproduce" in result.output
+    assert "works" not in result.output
+    record = json.loads((tmp_path / "g.json").read_text())
+    missing = [v["item"] for v in record["verdicts"] if v["status"] == "does not reproduce"]
+    assert record["reproduced"] is (not missing)
+    if missing:
+        assert "Does not reproduce:" in result.output
+    assert record["provenance"]["scenario"] == "garcia2018-greedy-m1 + garcia2018-greedy-m4"
