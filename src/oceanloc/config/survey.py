@@ -46,50 +46,17 @@ from pathlib import Path
 
 import numpy as np
 
-from oceanloc._typing import PLANNER_KINDS, FloatArray, PlannerKind
-from oceanloc.config.builtin import builtin_names, resolve_scenario
+from oceanloc._typing import FloatArray
+from oceanloc.config.builtin import builtin_names, read_scenario
 from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
+from oceanloc.planning.site_planners import (
+    SITE_PLANNER_KINDS,
+    PlannerSettings,
+    parse_site_planner,
+    site_planner_name,
+)
 from oceanloc.units import DEG
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class PlannerSettings:
-    """Which measurement-site planner to run and its parameters.
-
-    Attributes
-    ----------
-    kind : {"random-yaw", "random-disk", "greedy", "lookahead"}
-        ``random-yaw``: yaw rate uniform in ``[-w_max, w_max]`` (the journal's k = 0);
-        ``random-disk``: a point uniform in the disk of radius ``max_distance_m`` (the thesis' baseline);
-        ``greedy``: D-optimal point within ``max_distance_m`` (PLANS 2018 eqs. 18-29);
-        ``lookahead``: D-optimal yaw-rate sequence over ``horizon`` steps (journal eqs. 28-40).
-    horizon : int
-        Look-ahead steps ``k``.
-    max_distance_m : float
-        Reach ``d_max`` between epochs for the point planners, metres.
-    """
-
-    kind: PlannerKind = "lookahead"
-    horizon: int = 1
-    max_distance_m: float = 5.0
-
-    def __post_init__(self) -> None:
-        if self.kind not in PLANNER_KINDS:
-            raise ConfigError(f"planner kind must be one of {', '.join(PLANNER_KINDS)}; got '{self.kind}'")
-        if self.horizon < 1:
-            raise ConfigError(f"planner horizon must be at least 1, got {self.horizon}")
-        if not self.max_distance_m > 0:
-            raise ConfigError(f"planner max_distance_m must be positive, got {self.max_distance_m}")
-
-    @property
-    def label(self) -> str:
-        """Short label used in tables: ``k=0`` for random baselines, ``k=2`` or ``greedy``."""
-        if self.kind.startswith("random"):
-            return "k=0"
-        if self.kind == "greedy":
-            return "greedy"
-        return f"k={self.horizon}"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -131,6 +98,9 @@ class SurveyScenario:
         Default number of Monte Carlo runs.
     seed : int
         Default master seed.
+    toml_text : str
+        The TOML text the scenario was read from (empty if built in code); its SHA-256 goes into the
+        provenance of every record made from the scenario.
     """
 
     name: str
@@ -148,6 +118,7 @@ class SurveyScenario:
     estimator: EstimatorSettings = dataclasses.field(default_factory=EstimatorSettings)
     runs: int = 100
     seed: int = 0
+    toml_text: str = dataclasses.field(default="", repr=False, compare=False)
 
     @property
     def n_transponders(self) -> int:
@@ -157,6 +128,29 @@ class SurveyScenario:
         """The same scenario with another planner."""
         return dataclasses.replace(self, planner=planner)
 
+    def with_overrides(
+        self, *, planner: str | None = None, horizon: int | None = None, epochs: int | None = None
+    ) -> SurveyScenario:
+        """The scenario with a planner named as :func:`parse_site_planner` reads it (``k0``, ``k2``,
+        ``greedy``, ...), another look-ahead ``horizon`` and/or another number of ``epochs``.
+
+        ``horizon`` alone changes the look-ahead of a look-ahead planner (and is kept for the others).
+        """
+        scen = self
+        if planner is not None or horizon is not None:
+            cur = self.planner
+            keep = "lookahead" if cur.kind == "lookahead" else site_planner_name(cur)
+            scen = scen.with_planner(
+                parse_site_planner(
+                    planner or keep, horizon=horizon or cur.horizon, max_distance_m=cur.max_distance_m
+                )
+            )
+        if epochs is not None:
+            if epochs < 1:
+                raise ConfigError(f"epochs must be at least 1, got {epochs}")
+            scen = dataclasses.replace(scen, epochs=epochs)
+        return scen
+
 
 def builtin_survey_scenarios() -> list[str]:
     """Names of the survey scenarios shipped with oceanloc."""
@@ -165,8 +159,8 @@ def builtin_survey_scenarios() -> list[str]:
 
 def load_survey_scenario(name_or_path: str | Path) -> SurveyScenario:
     """Load a built-in survey scenario by name or a scenario TOML file by path."""
-    root, _ = resolve_scenario(name_or_path, "survey")
-    return survey_scenario_from_table(root)
+    root, _, text = read_scenario(name_or_path, "survey")
+    return dataclasses.replace(survey_scenario_from_table(root), toml_text=text)
 
 
 def survey_scenario_from_table(root: Table) -> SurveyScenario:
@@ -204,7 +198,7 @@ def survey_scenario_from_table(root: Table) -> SurveyScenario:
 
     plan_t = root.table("planner", required=False)
     planner = PlannerSettings(
-        kind=plan_t.str("kind", "lookahead", choices=PLANNER_KINDS),  # type: ignore[arg-type]
+        kind=plan_t.str("kind", "lookahead", choices=SITE_PLANNER_KINDS),  # type: ignore[arg-type]
         horizon=plan_t.int("horizon", 1, lo=1, hi=10),
         max_distance_m=plan_t.float("max_distance_m", 5.0, lo=0.0, lo_open=True),
     )
