@@ -196,3 +196,70 @@ def test_nmea_file_of_only_bad_times_is_one_data_error_naming_the_file(tmp_path:
     path.write_text("\n".join([ZDA, _gga(time="186000.00"), _gga(time="246060"), _gga(time="nan")]) + "\n")
     with pytest.raises(DataError, match=r"times\.nmea: no valid GPS fix.*3 lines skipped"):
         read_nmea(path)
+
+
+@pytest.mark.parametrize(
+    ("line", "reason", "detail"),
+    [
+        ("2018-01-04T18:00:01Z,99999999999999999999999999,3.0", "out of range", "beacon id 9999999999..."),
+        ("2018-01-04T18:00:01Z,9223372036854775808,3.0", "out of range", "is outside [0, 2147483647]"),
+        ("2018-01-04T18:00:01Z,-1,3.0", "out of range", "beacon id -1 is outside"),
+        ("2018-01-04T18:00:01Z,1,1e300", "negative or absurd range", "1e+300 m is not in (0, 10000] m"),
+        ("2018-01-04T18:00:01Z,1,0", "negative or absurd range", "0 m is not in (0, 10000] m"),
+        ("2018-01-04T18:00:01Z,1,-inf", "NaN or infinite value", "range_m"),
+        ("1900-01-04T18:00:01Z,1,3.0", "out of range", "-2208664799 s (Unix) is outside [315964800, 4102"),
+        ("9999-12-31T23:59:59Z,1,3.0", "out of range", "time 253402300799 s (Unix) is outside"),
+        ("0001-01-01T00:00:00+01:00,1,3.0", "out of range", "time -62135600400 s (Unix)"),
+        ("2018-01-04T18:00:01+25:00,1,3.0", "non-numeric field", "is not ISO 8601"),
+        ("2018-01-04T24:00:00Z,1,3.0", "non-numeric field", "is not ISO 8601"),
+        ("2018-01-04T18:00:00Z,1,3.0", "duplicate record", "the same range on line 2"),
+        ("2018-01-04T18:00:00Z,1,3.5", "duplicate record", "another range (3 m) on line 2"),
+    ],
+)
+def test_usbl_bad_values_are_qc_lines(tmp_path: Path, line: str, reason: str, detail: str):
+    """Huge or negative beacon ids, ranges and times out of range and repeated (time, beacon) lines are
+    QC lines; the valid ranges are kept once each."""
+    path = tmp_path / "u.csv"
+    path.write_text(f"utc,beacon,range_m\n2018-01-04T18:00:00Z,1,3.0\n{line}\n2018-01-04T18:00:02Z,2,4.0\n")
+    log = read_usbl(path)
+    np.testing.assert_array_equal(log.range_m, [3.0, 4.0])
+    np.testing.assert_array_equal(log.beacon, [1, 2])
+    [issue] = log.qc.issues
+    assert (issue.line, issue.reason) == (3, reason)
+    assert detail in issue.detail
+
+
+def test_usbl_duplicated_lines_are_used_once(tmp_path: Path):
+    body = "".join(f"2018-01-04T18:00:0{k}Z,{b},{3 + k}.0\n" for k in range(3) for b in (1, 2))
+    path = tmp_path / "dup.csv"
+    path.write_text("utc,beacon,range_m\n" + "".join(line * 2 for line in body.splitlines(keepends=True)))
+    log = read_usbl(path)
+    assert log.range_m.size == 6
+    assert log.qc.counts() == {"duplicate record": 6}
+    np.testing.assert_array_equal(log.line, [2, 4, 6, 8, 10, 12])
+
+
+@pytest.mark.parametrize(
+    "stamp",
+    [
+        "2018-01-04T20:00:01.500+02:00",
+        "2018-01-04T20:00:01.500+0200",
+        "2018-01-04T20:00:01.500+02",
+        "2018-01-04T20:00:01.500 +02:00",
+        "2018-01-04T10:00:01.500-08:00",
+        "2018-01-04T18:00:01.500 UTC",
+        "2018-01-04 18:00:01.500z",
+        "20180104T180001.5Z",
+        "2018-01-04T18:00:01.500",
+    ],
+)
+def test_usbl_times_with_a_zone_offset_align_with_the_gps(tmp_path: Path, stamp: str):
+    """Every zone spelling gives the same instant, 1.5 s after the first fix, so the range is aligned."""
+    gps_path = tmp_path / "g.nmea"
+    gps_path.write_text("\n".join([ZDA, *GGA]) + "\n")
+    r_path = tmp_path / "r.csv"
+    r_path.write_text(f"utc,beacon,range_m\n{stamp},1,5.0\n")
+    log = read_usbl(r_path)
+    assert log.t_unix_s[0] == pytest.approx(T0.timestamp() + 1.5, abs=1e-6)
+    aligned = align_ranges(read_nmea(gps_path), log)
+    assert aligned.dropped_no_gps == 0 and aligned.range_m.size == 1

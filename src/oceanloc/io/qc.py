@@ -47,6 +47,9 @@ HEIGHT_RANGE_M: tuple[float, float] = (-1_000.0, 10_000.0)
 """Ellipsoidal heights a GPS antenna on a survey vehicle may have, metres: the geoid lies within about
 -107 to +86 m of the ellipsoid, so anything beyond these bounds is a corrupt field."""
 
+BEACON_ID_RANGE: tuple[int, int] = (0, 2**31 - 1)
+"""Beacon ids a reader or the journal accepts (non-negative 32-bit integers: SQLite and numpy hold them)."""
+
 MAX_RANGE_M: float = 10_000.0
 """Longest acoustic range a reader or the journal accepts, metres (USBL and LBL systems reach a few km)."""
 
