@@ -34,6 +34,7 @@ from oceanloc.io.qc import (
     QcReport,
     out_of_range,
     read_lines,
+    time_problem,
 )
 
 
@@ -52,6 +53,8 @@ class GpsLog:
     line : (n,) int
         Line number of each fix.
     qc : QcReport
+    heading_line : (h,) int or None
+        Line number of each heading (None when the headings do not come from a file).
     """
 
     t_unix_s: FloatArray
@@ -62,6 +65,7 @@ class GpsLog:
     heading_deg: FloatArray
     line: IntArray
     qc: QcReport
+    heading_line: IntArray | None = None
 
     @property
     def n_fixes(self) -> int:
@@ -87,7 +91,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     date: dt.date | None = None
     rows: list[tuple[float, float, float, float]] = []
     lines: list[int] = []
-    headings: list[tuple[float, float]] = []
+    headings: list[tuple[float, float, int]] = []
     last_t = -np.inf
     for number, text in read_lines(p, qc):
         start = text.find("$")
@@ -114,7 +118,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
                 date = _checked_date(msg.datetime.date())
                 continue
             if kind == "HDT":
-                headings.append((last_t, _checked_heading(msg.heading)))
+                headings.append((last_t, _checked_heading(msg.heading), number))
                 continue
             if kind == "RMC":
                 rmc_date = _rmc_date(msg)
@@ -143,7 +147,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     if not rows:
         raise DataError(f"{p}: no valid GPS fix ({qc.summary(max_lines=3)})")
     a = np.asarray(rows)
-    hd = np.asarray(headings).reshape(-1, 2)
+    hd = np.asarray(headings, dtype=float).reshape(-1, 3)
     return GpsLog(
         t_unix_s=a[:, 0],
         lat_deg=a[:, 1],
@@ -153,6 +157,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
         heading_deg=hd[:, 1],
         line=np.asarray(lines, dtype=np.int64),
         qc=qc,
+        heading_line=hd[:, 2].astype(np.int64),
     )
 
 
@@ -238,7 +243,7 @@ def _gga_fix(msg: pynmea2.NMEASentence, date: dt.date | None) -> tuple[float, fl
     if problem := out_of_range("ellipsoidal height", h, HEIGHT_RANGE_M, "m"):
         raise _UnusableSentenceError("out of range", problem)
     t = dt.datetime.combine(date, stamp).replace(tzinfo=dt.UTC).timestamp()
-    if problem := out_of_range("time", t, TIME_RANGE_UNIX_S, "s (Unix)"):
+    if problem := time_problem(t):
         raise _UnusableSentenceError("out of range", problem)
     return t, lat, lon, h
 

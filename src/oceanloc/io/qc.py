@@ -54,6 +54,12 @@ MAX_RANGE_M: float = 10_000.0
 """Longest acoustic range a reader or the journal accepts, metres (USBL and LBL systems reach a few km)."""
 
 
+def time_problem(t_unix_s: float) -> str | None:
+    """None if a Unix time is within :data:`TIME_RANGE_UNIX_S`, else a message naming the range."""
+    problem = out_of_range("time", t_unix_s, TIME_RANGE_UNIX_S, "s")
+    return None if problem is None else f"{problem} (Unix time: 1980-01-06 to 2100-01-01 UTC)"
+
+
 def out_of_range(name: str, value: float, bounds: tuple[float, float], unit: str) -> str | None:
     """None if ``bounds[0] <= value <= bounds[1]`` (and finite), else a message naming the field and range.
 

@@ -31,7 +31,13 @@ from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.geo.enu import EnuOrigin, geodetic_to_enu
 from oceanloc.io.nmea import GpsLog
-from oceanloc.io.qc import BEACON_ID_RANGE, MAX_RANGE_M, TIME_RANGE_UNIX_S, QcReport, out_of_range, read_lines
+from oceanloc.io.qc import (
+    BEACON_ID_RANGE,
+    MAX_RANGE_M,
+    QcReport,
+    read_lines,
+    time_problem,
+)
 
 RANGE_COLUMNS: dict[str, float] = {"range_m": 0.0, "owtt_s": 1.0, "twtt_s": 0.5}
 """Accepted measurement columns and the factor applied to ``c * value`` (0: already metres)."""
@@ -113,7 +119,7 @@ def read_usbl(
         except ValueError:
             qc.add(p, number, "non-numeric field", f"{fields[1][:12]!r}, {fields[2][:20]!r}")
             continue
-        if problem := out_of_range("time", t, TIME_RANGE_UNIX_S, "s (Unix)"):
+        if problem := time_problem(t):
             qc.add(p, number, "out of range", problem)
             continue
         if not BEACON_ID_RANGE[0] <= beacon <= BEACON_ID_RANGE[1]:
