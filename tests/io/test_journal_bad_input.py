@@ -257,3 +257,59 @@ def test_a_journal_in_a_read_only_folder_is_reported_as_such(tmp_path: Path):
         f"JournalError {folder / 'j.db'}: cannot use the journal: the folder {folder} is read-only (a "
         "journal needs to create j.db-wal and j.db-shm beside it); copy the journal to a writable folder"
     ), res.stdout + res.stderr
+
+
+def test_survey_add_with_an_out_of_range_fix_keeps_the_file_and_names_the_line(tmp_path: Path):
+    """The issue's case: a checksum-valid GGA at latitude 99 in the middle of a log. Before, `survey add`
+    committed part of the file and aborted naming no file or line. Now the line is a QC line
+    (file:line: reason), every other fix is added, and re-adding the file changes nothing."""
+    import pynmea2
+
+    t0 = dt.datetime(2018, 1, 4, 18, 0, tzinfo=dt.UTC)
+    lines = [format_zda(t0)]
+    for k in range(6):
+        lines.append(format_gga(t0 + dt.timedelta(seconds=k), 32.705 + 1e-5 * k, -117.236, -1.478))
+    lat99 = (
+        "180002.50",
+        "9900.0000",
+        "N",
+        "11714.1600",
+        "W",
+        "2",
+        "09",
+        "0.9",
+        "-1.478",
+        "M",
+        "0.0",
+        "M",
+        "",
+        "",
+    )
+    lines.insert(4, str(pynmea2.GGA("GP", "GGA", lat99)))
+    nmea = tmp_path / "gps.nmea"
+    nmea.write_text("\n".join(lines) + "\n")
+    journal = str(tmp_path / "s.db")
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "oceanloc", "survey", *args],
+            capture_output=True,
+            text=True,
+            env=os.environ,
+        )
+
+    assert run("start", journal).returncode == 0
+    add = run("add", journal, "--nmea", str(nmea))
+    err = " ".join(add.stderr.split())
+    assert add.returncode == 0 and "Traceback" not in err, err
+    assert "gps.nmea:5: out of range (latitude 99 deg is outside [-90, 90] deg)" in err
+    assert "6 fixes (6 new, 0 already stored)" in " ".join(add.stdout.split())
+    again = run("add", journal, "--nmea", str(nmea))
+    assert "6 fixes (0 new, 6 already stored)" in " ".join(again.stdout.split())
+    with Journal.open(journal) as j:
+        lat = j.records().lat_deg
+    assert lat.size == 6 and np.all(np.abs(lat) <= 90.0)
+    bad_fix = run("add", journal, "--fix", "1e20,32.7,-117.2,0")
+    assert bad_fix.returncode == 2 and "Traceback" not in bad_fix.stderr
+    assert "time 1e+20 s is outside [315964800, 4102444800] s" in " ".join(bad_fix.stderr.split())
+    assert run("status", journal).returncode == 0
