@@ -143,7 +143,7 @@ def test_a_poisoned_journal_is_read_skipping_and_reporting_the_bad_rows_which_ca
 ):
     path = tmp_path / "j.db"
     logs = simulate_pier_logs(
-        tmp_path, PierLogSettings(duration_s=200.0, stationary_s=60.0), np.random.default_rng(1)
+        tmp_path, PierLogSettings(duration_s=120.0, stationary_s=40.0), np.random.default_rng(1)
     )
     with Journal.start(path, {}) as j:
         append_gps_log(j, read_nmea(logs.nmea_path), "gps")
@@ -173,10 +173,23 @@ def test_a_poisoned_journal_is_read_skipping_and_reporting_the_bad_rows_which_ca
         assert after.invalid == () and after.n_fixes == clean.n_fixes and after.n_ranges == clean.n_ranges
 
 
-def test_commands_reading_a_poisoned_journal_still_work(tmp_path: Path):
+def _main(args: list[str], capsys) -> tuple[int, str, str]:
+    """The console script in-process (a subprocess costs seconds of imports): (exit, stdout, stderr)."""
+    from oceanloc.cli.app import main
+
+    try:
+        main(args)
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_commands_reading_a_poisoned_journal_still_work(tmp_path: Path, capsys):
     """`survey status` and `export` on a journal holding out-of-range rows: exit 0, estimates as before."""
     logs = simulate_pier_logs(
-        tmp_path, PierLogSettings(duration_s=300.0, stationary_s=100.0), np.random.default_rng(2)
+        tmp_path, PierLogSettings(duration_s=120.0, stationary_s=40.0), np.random.default_rng(2)
     )
     journal = str(tmp_path / "s.db")
 
@@ -259,7 +272,7 @@ def test_a_journal_in_a_read_only_folder_is_reported_as_such(tmp_path: Path):
     ), res.stdout + res.stderr
 
 
-def test_survey_add_with_an_out_of_range_fix_keeps_the_file_and_names_the_line(tmp_path: Path):
+def test_survey_add_with_an_out_of_range_fix_keeps_the_file_and_names_the_line(tmp_path: Path, capsys):
     """The issue's case: a checksum-valid GGA at latitude 99 in the middle of a log. Before, `survey add`
     committed part of the file and aborted naming no file or line. Now the line is a QC line
     (file:line: reason), every other fix is added, and re-adding the file changes nothing."""
