@@ -114,3 +114,71 @@ def test_bad_inputs_raise_config_errors():
         RangeProblem.build(TABLE_I, np.ones(4), -1.0)
     with pytest.raises(ConfigError, match="sensor_m has shape"):
         RangeProblem.build(np.zeros((3, 3)), np.ones((1, 4)), 1.0)
+
+
+@pytest.mark.parametrize(
+    ("mean", "cov", "message"),
+    [
+        (
+            [1.0, 2.0, -3.0],
+            np.diag([100.0, -100.0, 4.0]),
+            r"problem 0 is not positive definite \(eigenvalues -100",
+        ),
+        ([1.0, 2.0, -3.0], [[4.0, 5.0, 0], [5.0, 4.0, 0], [0, 0, 1]], "problem 0 is not positive definite"),
+        ([1.0, 2.0, -3.0], np.diag([100.0, 0.0, 4.0]), r"problem 0 is singular \(eigenvalues 0, 4, 100 m\^2"),
+        ([1.0, 2.0, -3.0], np.diag([5e-324**2, 1.0, 1.0]), "problem 0 is singular"),
+        (
+            [1.0, 2.0, -3.0],
+            np.diag([np.inf, 1.0, 1.0]),
+            "holds NaN or infinite values .a sigma beyond 1e154 m",
+        ),
+        ([1.0, 2.0, -3.0], np.diag([np.nan, 1.0, 1.0]), "problem 0 holds NaN or infinite values"),
+        ([1.0, 2.0, -3.0], [[4.0, 1.0, 0], [0.0, 4.0, 0], [0, 0, 1]], "problem 0 is not symmetric"),
+        (
+            [np.nan, 2.0, -3.0],
+            P0,
+            r"prior mean of problem 0 holds NaN or infinite values: \[nan, 2.0, -3.0\]",
+        ),
+        ([np.inf, 2.0, -3.0], P0, "prior mean of problem 0 holds NaN or infinite values"),
+    ],
+)
+def test_bad_priors_are_config_errors_naming_the_problem(mean, cov, message):
+    problem = RangeProblem.build(TABLE_I, range_m(P_T, TABLE_I), 0.1)
+    with pytest.raises(ConfigError, match=message):
+        solve_map(problem, GaussianPrior(mean=np.asarray(mean)[None], cov=np.asarray(cov)))
+
+
+def test_a_bad_prior_in_a_batch_is_named_by_its_index():
+    problem = RangeProblem.build(
+        np.broadcast_to(TABLE_I, (3, 4, 3)), np.tile(range_m(P_T, TABLE_I), (3, 1)), 0.1
+    )
+    cov = np.stack([P0, P0, np.diag([1.0, 1.0, -1.0])])
+    with pytest.raises(ConfigError, match="prior covariance of problem 2 is not positive definite"):
+        solve_map(problem, GaussianPrior(mean=np.tile(P_T, (3, 1)), cov=cov))
+
+
+def test_prior_mean_on_the_only_sensor_is_degenerate_not_converged():
+    """One sensor and the prior mean on it: the range has no direction there, the step is zero, and the
+    old solver reported convergence at the sensor. Now the status says so; a start off the sensor (second
+    problem) moves to the range sphere and converges."""
+    sensor = np.array([[0.0, 0.0, -5.0]])
+    problem = RangeProblem.build(np.broadcast_to(sensor, (2, 1, 3)), np.array([[10.0], [10.0]]), 0.1)
+    prior = GaussianPrior(mean=np.array([[0.0, 0.0, -5.0], [1.0, 0.0, -5.0]]), cov=P0)
+    res = solve_map(problem, prior)
+    assert res.status.tolist() == ["degenerate", "converged"]
+    assert res.converged.tolist() == [False, True]
+    assert "measurement 0 has no information at the estimate" in res.message[0] and res.message[1] == ""
+    np.testing.assert_array_equal(res.estimate[0], sensor[0])
+    assert np.linalg.norm(res.estimate[1] - sensor[0]) == pytest.approx(10.0, abs=0.05)
+    # Several sensors, one at the start: the others move the estimate off it and it converges.
+    problem = RangeProblem.build(TABLE_I, range_m(P_T, TABLE_I), 0.1)
+    res = solve_map(problem, GaussianPrior(mean=TABLE_I[:1], cov=P0))
+    assert res.status.tolist() == ["converged"]
+    assert np.linalg.norm(res.estimate[0] - TABLE_I[0]) > 1.0
+
+
+def test_iteration_limit_is_a_status_with_a_message():
+    problem, prior = _section_va(2, seed=3)
+    res = solve_map(problem, prior, MapOptions(max_iterations=1))
+    assert res.status.tolist() == ["max-iterations"] * 2
+    assert res.message[0] == "step test not met in 1 iterations" and not res.converged.any()

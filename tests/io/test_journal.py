@@ -12,6 +12,7 @@ from oceanloc.errors import DataError
 from oceanloc.io.journal import Journal
 from oceanloc.io.qc import QcReport
 
+T1 = 1.5e9
 WRITER = """
 import sys
 from oceanloc.io.journal import Journal
@@ -27,11 +28,11 @@ for k in range(100000):
 
 def test_readd_is_idempotent_and_bad_values_rejected(tmp_path: Path):
     with Journal(tmp_path / "j.db") as j:
-        assert j.add_fix(1.0, 32.7, -117.2, 0.0) is True
-        assert j.add_fix(1.0, 32.7, -117.2, 0.0) is False
-        assert j.add_range(1.5, 1, 9.0) and not j.add_range(1.5, 1, 9.0)
-        with pytest.raises(DataError, match="negative"):
-            j.add_range(2.0, 1, -1.0)
+        assert j.add_fix(1.5e9, 32.7, -117.2, 0.0) is True
+        assert j.add_fix(1.5e9, 32.7, -117.2, 0.0) is False
+        assert j.add_range(1.5e9 + 0.5, 1, 9.0) and not j.add_range(1.5e9 + 0.5, 1, 9.0)
+        with pytest.raises(DataError, match=r"range -1 m is not in \(0, 10000\] m"):
+            j.add_range(1.5e9 + 1, 1, -1.0)
         assert j.fixes().shape == (1, 4) and j.ranges().shape == (1, 3)
 
 
@@ -120,7 +121,7 @@ def test_open_refuses_missing_unstarted_and_foreign_files(tmp_path: Path):
     with Journal.open(tmp_path / "s.db") as j:
         assert j.meta()["planner"] == '"greedy"'
     with pytest.raises(DataError, match="latitude 91"):
-        Journal(tmp_path / "r.db").add_fix(1.0, 91.0, 0.0, 0.0)
+        Journal(tmp_path / "r.db").add_fix(1.5e9, 91.0, 0.0, 0.0)
 
 
 def test_write_to_a_locked_journal_is_a_data_error_and_keeps_the_state(tmp_path: Path):
@@ -128,13 +129,13 @@ def test_write_to_a_locked_journal_is_a_data_error_and_keeps_the_state(tmp_path:
 
     path = tmp_path / "j.db"
     with Journal(path) as j:
-        j.add_fix(1.0, 32.7, -117.2, 0.0)
+        j.add_fix(T1, 32.7, -117.2, 0.0)
     other = sqlite3.connect(path, isolation_level=None)
     other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock
     with Journal(path, timeout_s=0.05) as j:
         with pytest.raises(DataError, match=r"j\.db: cannot write to the journal \(database is locked\)"):
-            j.add_fix(2.0, 32.7, -117.2, 0.0)
+            j.add_fix(T1 + 1, 32.7, -117.2, 0.0)
         other.rollback()
-        assert j.add_fix(2.0, 32.7, -117.2, 0.0)
-        np.testing.assert_array_equal(j.fixes()[:, 0], [1.0, 2.0])
+        assert j.add_fix(T1 + 1, 32.7, -117.2, 0.0)
+        np.testing.assert_array_equal(j.fixes()[:, 0], [T1, T1 + 1])
     other.close()

@@ -33,13 +33,42 @@ def read_toml(path: str | Path) -> Table:
     return parse_toml(text, source=str(p))
 
 
+MAX_TOML_DEPTH = 16
+"""Deepest nesting of tables and arrays a scenario file may have (the scenarios use 3)."""
+
+
 def parse_toml(text: str, source: str = "<string>") -> Table:
-    """Parse TOML text; ``source`` names it in error messages."""
+    """Parse TOML text; ``source`` names it in error messages.
+
+    Raises
+    ------
+    ConfigError
+        If the text is not valid TOML or nests tables and arrays deeper than :data:`MAX_TOML_DEPTH`.
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{source}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise ConfigError(f"{source}: not valid TOML (arrays or tables nested too deeply)") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise ConfigError(f"{source}: not valid TOML ({exc})") from None
+    if _depth(data) > MAX_TOML_DEPTH:
+        raise ConfigError(f"{source}: tables and arrays nested deeper than {MAX_TOML_DEPTH} levels")
     return Table(data, source=source, name="")
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of dicts and lists (iterative: no recursion limit)."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, level = stack.pop()
+        if isinstance(item, dict | list):
+            deepest = max(deepest, level + 1)
+            if deepest > MAX_TOML_DEPTH:
+                return deepest
+            stack.extend((v, level + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
 
 
 class Table:
@@ -89,7 +118,10 @@ class Table:
         value = self._get(key, default)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(key, f"must be a number, got {value!r}")
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise self.error(key, f"must be finite, got an integer of {len(str(value))} digits") from None
         if not math.isfinite(value):
             raise self.error(key, f"must be finite, got {value}")
         _check_range(self, key, value, lo, hi, lo_open, hi_open)
@@ -134,7 +166,10 @@ class Table:
             isinstance(v, int | float) and not isinstance(v, bool) for v in value
         ):
             raise self.error(key, f"must be a list of numbers, got {value!r}")
-        arr = np.asarray(value, dtype=float)
+        try:
+            arr = np.asarray(value, dtype=float)
+        except OverflowError:
+            raise self.error(key, "must hold finite numbers, got an integer too large for a float") from None
         if length is not None and arr.shape != (length,):
             raise self.error(key, f"must have {length} numbers, got {arr.size}")
         if not np.all(np.isfinite(arr)):

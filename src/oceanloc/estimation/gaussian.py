@@ -108,3 +108,43 @@ def clip_eigenvalues(cov: ArrayLike, rel_floor: float = 1e-12) -> FloatArray:
     floor = np.maximum(rel_floor * scale, np.finfo(float).tiny ** 0.5)
     w = np.maximum(w, floor)
     return symmetrize(np.einsum("...ij,...j,...kj->...ik", v, w, v))
+
+
+def repair_covariance(
+    cov: ArrayLike, rel_floor: float = 1e-12, sym_tol: float = 1e-9
+) -> tuple[FloatArray, BoolArray]:
+    """Symmetric positive-definite covariances, and which of them needed a repair.
+
+    A matrix is left exactly as it is (bit for bit) when it is symmetric to ``sym_tol`` relative to its
+    largest entry and its Cholesky factorization succeeds. Otherwise it is symmetrized and, if still not
+    positive definite, its eigenvalues are clipped from below at ``rel_floor`` times the largest
+    (:func:`clip_eigenvalues`: the nearest such matrix in the Frobenius norm), and it is flagged.
+    Matrices with non-finite entries cannot be repaired: they are returned unchanged and flagged.
+
+    Parameters
+    ----------
+    cov : (..., n, n) float
+
+    Returns
+    -------
+    cov : (..., n, n) float
+        Symmetric positive definite (where finite).
+    repaired : (...) bool
+    """
+    p = np.asarray(cov, dtype=float)
+    finite = np.all(np.isfinite(p), axis=(-1, -2))
+    scale = np.max(np.abs(np.where(finite[..., None, None], p, 0.0)), axis=(-1, -2))
+    asym = np.max(np.abs(p - np.swapaxes(p, -1, -2)), axis=(-1, -2)) > sym_tol * scale
+    asym &= finite
+    if not (asym.any() or not finite.all()):
+        try:
+            np.linalg.cholesky(p)
+            return p, np.zeros(p.shape[:-2], dtype=bool)
+        except np.linalg.LinAlgError:
+            pass
+    sym = np.where(asym[..., None, None], symmetrize(p), p)
+    safe = np.where(finite[..., None, None], sym, np.eye(p.shape[-1]))
+    w = np.linalg.eigvalsh(symmetrize(safe))
+    indefinite = finite & (w[..., 0] <= rel_floor * np.max(np.abs(w), axis=-1))
+    out = np.where(indefinite[..., None, None], clip_eigenvalues(safe, rel_floor), sym)
+    return out, asym | indefinite | ~finite

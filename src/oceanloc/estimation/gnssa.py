@@ -22,6 +22,16 @@ Far pings: a straight ray at constant speed is wrong by an amount that grows wit
 (ray bending through the sound-speed profile), so the range-dependent term down-weights far pings by
 what the data say their extra scatter is; an elevation cut (``max_tan_incidence``) is available too.
 
+Gross errors first: a ping file can hold travel times that fit no position at all (a wrong column, a
+missed turn-around, a quarter of the pings at an absurd value). Least squares follows them by kilometres,
+and the one-at-a-time rule below, capped at ``max_outlier_fraction``, cannot remove them all. So a robust
+first fit (:func:`robust_first_fit`: position only, the given sound speed, Tukey-biweight iteratively
+reweighted MAP from three starting points, the one with the smallest MAD of residuals kept) screens the
+pings: those whose residual departs from the median by more than ``max(prescreen_sigmas * 1.4826 MAD,
+gross_error_m)`` are excluded as gross errors before the real solve. If more than
+``max_gross_fraction`` of the pings are gross, or a used ping still has a residual above
+``gross_error_m`` at the end, the survey cannot be solved reliably and a :class:`DataError` says so.
+
 Outliers: the authors' rule (Xie et al. 2023): the ping with the largest normalized residual is removed
 if it exceeds ``outlier_threshold`` (3), one at a time, re-solving and re-estimating the noise after each
 removal. Every exclusion is listed with its reason.
@@ -80,7 +90,14 @@ class GnssaOptions:
     max_outlier_fraction : float
         At most this fraction of the pings is excluded as outliers.
     gross_error_m : float
-        Exclusions with a residual larger than this are labelled gross errors (same rule, clearer label).
+        Exclusions with a residual larger than this are labelled gross errors (same rule, clearer label);
+        also the smallest residual the pre-screen excludes, and the largest a used ping may keep.
+    prescreen : bool
+        Screen gross errors with a robust first fit before the solve (see the module docstring).
+    prescreen_sigmas : float
+        Pre-screen threshold in robust (MAD) standard deviations of the first fit's residuals.
+    max_gross_fraction : float
+        Largest fraction of the pings the pre-screen may exclude; beyond it the survey is refused.
     range_dependent_weights : bool
         Estimate the far-ping term ``beta * tan(incidence)`` of the noise.
     max_tan_incidence : float or None
@@ -115,6 +132,9 @@ class GnssaOptions:
     outlier_threshold: float = 3.0
     max_outlier_fraction: float = 0.2
     gross_error_m: float = 5.0
+    prescreen: bool = True
+    prescreen_sigmas: float = 8.0
+    max_gross_fraction: float = 0.4
     range_dependent_weights: bool = True
     max_tan_incidence: float | None = None
     sigma_position_prior_m: float = 1000.0
@@ -137,6 +157,14 @@ class GnssaOptions:
             raise ConfigError(f"outlier_threshold must exceed 1, got {self.outlier_threshold}")
         if not 0.0 <= self.max_outlier_fraction < 0.5:
             raise ConfigError("max_outlier_fraction must be in [0, 0.5)")
+        if not 0.0 <= self.max_gross_fraction < 0.5:
+            raise ConfigError(
+                "max_gross_fraction must be in [0, 0.5): a majority of gross errors cannot be told apart"
+            )
+        if not (self.gross_error_m > 0.0 and np.isfinite(self.gross_error_m)):
+            raise ConfigError(f"gross_error_m must be a positive number of metres, got {self.gross_error_m}")
+        if not self.prescreen_sigmas > 1.0:
+            raise ConfigError(f"prescreen_sigmas must exceed 1, got {self.prescreen_sigmas}")
         if self.max_tan_incidence is not None and self.max_tan_incidence <= 0.0:
             raise ConfigError("max_tan_incidence must be positive")
         if self.jackknife_blocks == 1 or self.jackknife_blocks < 0:
@@ -409,8 +437,25 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     )
     k0 = template.first_knot
     dim = k0 + n_knots
+    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
 
-    x0 = _initial_guess(tx, twtt, options.sound_speed_mps)
+    gross = np.zeros(n, dtype=bool)
+    fit_resid = np.zeros(n)
+    threshold = np.inf
+    if options.prescreen and n >= 8:
+        fit = robust_first_fit(tx, rx, twtt, options.sound_speed_mps, surface)
+        fit_resid = fit.residual_m - np.median(fit.residual_m)
+        threshold = max(options.prescreen_sigmas * fit.sigma_m, options.gross_error_m)
+        gross = np.abs(fit_resid) > threshold
+        if gross.sum() > options.max_gross_fraction * n:
+            raise DataError(
+                f"{survey.path}: {int(gross.sum())} of {n} pings ({100.0 * gross.mean():.0f} %) have travel "
+                f"times no single transponder position explains (|residual| > {threshold:.2f} m at a robust "
+                f"first fit), more than the {100.0 * options.max_gross_fraction:.0f} % allowed "
+                "(max_gross_fraction): the survey cannot be solved reliably; check the travel-time column, "
+                "its units and the turn-around delay"
+            )
+    x0 = _initial_guess(tx[~gross], twtt[~gross], options.sound_speed_mps)
     prior_mean = np.concatenate([x0, np.zeros(k0 - 3), np.full(n_knots, options.sound_speed_mps)])[None, :]
     prior_var = [options.sigma_position_prior_m**2] * 3
     if options.estimate_gradient:
@@ -425,15 +470,14 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
             -lag / options.sound_speed_correlation_s
         )
     prior = GaussianPrior(mean=prior_mean, cov=prior_cov)
-    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
     map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface)
 
-    candidates = np.ones(n, dtype=bool)
+    candidates = ~gross
     exclusions: list[Exclusion] = []
     if options.max_tan_incidence is not None:
         depth = np.maximum(tx[:, 2] - x0[2], 1.0)
         tan_inc = np.hypot(tx[:, 0] - x0[0], tx[:, 1] - x0[1]) / depth
-        for i in np.flatnonzero(tan_inc > options.max_tan_incidence):
+        for i in np.flatnonzero(candidates & (tan_inc > options.max_tan_incidence)):
             candidates[i] = False
             exclusions.append(
                 Exclusion(
@@ -485,12 +529,33 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         )
 
     problem = template.with_mask(used[None, :], sigma)
+    resid = _path_residual(problem, x)[0]
+    left = used & (np.abs(resid) > options.gross_error_m)
+    if left.any():
+        worst = int(np.argmax(np.where(left, np.abs(resid), 0.0)))
+        n_excluded = len(exclusions) + int(gross.sum())
+        raise DataError(
+            f"{survey.path}: after excluding {n_excluded} pings, {int(left.sum())} used "
+            f"pings still have |residual| > {options.gross_error_m:g} m (line {int(survey.line[worst])}: "
+            f"{resid[worst]:+.1f} m): the survey cannot be solved reliably; check its travel times"
+        )
+    prescreened = [
+        Exclusion(
+            index=int(i),
+            line=int(survey.line[i]),
+            time_s=float(survey.t_transmit_s[i]),
+            reason=f"gross error (pre-screen): |residual| {abs(fit_resid[i]):.1f} m at the robust first fit "
+            f"> {threshold:.2f} m",
+            residual_m=float(resid[i]),
+        )
+        for i in np.flatnonzero(gross)
+    ]
+    exclusions = prescreened + exclusions
     cov_formal = result.covariance[0, :3, :3]
     cov_jk = _jackknife(problem, prior, map_opts, x, t_mid, used, options.jackknife_blocks)
     cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
     cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
     cov = cov + cov_gnss
-    resid = _path_residual(problem, x)[0]
     speed = problem.speed(x)[0]
     geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
     return GnssaResult(
@@ -516,6 +581,94 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         beta_m=float(beta),
         converged=bool(result.converged[0]),
     )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RobustFit:
+    """Result of :func:`robust_first_fit`.
+
+    Attributes
+    ----------
+    position_enu_m : (3,) float
+        Transponder position, metres.
+    residual_m : (n,) float
+        ``c TWTT - path`` of every ping at that position, metres (two-way path).
+    sigma_m : float
+        Robust standard deviation of the residuals, ``1.4826 * MAD``, metres.
+    """
+
+    position_enu_m: FloatArray
+    residual_m: FloatArray
+    sigma_m: float
+
+
+_TUKEY_C = 4.685
+"""Tukey biweight tuning constant (95 % efficiency at the normal)."""
+
+
+def robust_first_fit(
+    transmit_m: FloatArray,
+    receive_m: FloatArray,
+    twtt_s: FloatArray,
+    speed_mps: float,
+    surface_z_m: float,
+    iterations: int = 12,
+) -> RobustFit:
+    """A transponder position that a minority of gross travel times cannot move.
+
+    Position only, straight rays at the given sound speed; Tukey-biweight iteratively reweighted MAP
+    (weights ``(1 - u^2)^2`` for ``|u| = |r - median r| / (4.685 * 1.4826 MAD) < 1``, else 0; the scale
+    floored at 1 cm) from three starting points: below the ping with the shortest travel time, below
+    the ping at the 10th percentile of travel time, and below the median surface position at the median
+    travel time's depth. The start whose fit has the smallest MAD is returned. Its breakdown point is
+    that of the median: it holds while fewer than half of the pings are gross.
+    """
+    n = twtt_s.size
+    problem = GnssaProblem(
+        transmit_m, receive_m, twtt_s, np.zeros((n, 0)), np.ones(n), np.ones((1, n), dtype=bool), speed_mps
+    )
+    opts = MapOptions(delta_min_m=1e-4, max_iterations=50, surface_z_m=surface_z_m)
+    best: RobustFit | None = None
+    for start in _robust_starts(transmit_m, twtt_s, speed_mps):
+        x = start[None, :]
+        prior = GaussianPrior(mean=x.copy(), cov=1e6 * np.eye(3))  # 1 km: only keeps the solve defined
+        for _ in range(iterations):
+            r = _path_residual(problem, x)[0]
+            med = np.median(r)
+            scale = max(1.4826 * float(np.median(np.abs(r - med))), 0.01)
+            u = (r - med) / (_TUKEY_C * scale)
+            w = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+            keep = w > 1e-6
+            if keep.sum() < 4:
+                break
+            sigma = scale / np.sqrt(np.where(keep, w, 1.0))
+            x = solve_map(problem.with_mask(keep[None, :], sigma), prior, opts, initial=x).estimate
+        r = _path_residual(problem, x)[0]
+        fit = RobustFit(
+            position_enu_m=x[0].copy(),
+            residual_m=r,
+            sigma_m=1.4826 * float(np.median(np.abs(r - np.median(r)))),
+        )
+        if np.all(np.isfinite(fit.position_enu_m)) and (best is None or fit.sigma_m < best.sigma_m):
+            best = fit
+    if best is None:
+        raise DataError("no robust first fit: every start gave a NaN position")
+    return best
+
+
+def _robust_starts(tx: FloatArray, twtt: FloatArray, speed: float) -> list[FloatArray]:
+    """Starting points of :func:`robust_first_fit` (see there)."""
+    order = np.argsort(twtt, kind="stable")
+    starts = [
+        _initial_guess(tx, twtt, speed),
+        _initial_guess(tx[order[twtt.size // 10 :]], twtt[order[twtt.size // 10 :]], speed),
+    ]
+    e, nn = np.median(tx[:, 0]), np.median(tx[:, 1])
+    offset = float(np.median(np.hypot(tx[:, 0] - e, tx[:, 1] - nn)))
+    leg = 0.5 * speed * float(np.median(twtt))
+    depth = np.sqrt(max(leg * leg - offset * offset, (0.1 * leg) ** 2))
+    starts.append(np.array([e, nn, float(np.median(tx[:, 2])) - depth]))
+    return starts
 
 
 def _initial_guess(tx: FloatArray, twtt: FloatArray, speed: float) -> FloatArray:

@@ -15,6 +15,11 @@ Choices a mature filter needs and the thesis leaves implicit:
   other columns as if the rows had been removed. A track with no measurement at all is left at its
   prediction. The NIS counts only the measurements present (``dof``).
 - Every array carries the batch dimension first: ``B`` tracks are stepped in one call.
+- Covariances are kept symmetric positive definite: a prediction that is not symmetric or not positive
+  definite (a bad model, a hand-made prior, round-off) is repaired before the update
+  (:func:`oceanloc.estimation.gaussian.repair_covariance`: symmetrize, clip eigenvalues), and so are
+  ``S`` and the posterior; the track is flagged (``repaired``). A valid input is used bit for bit as it
+  is. The NIS is therefore never negative.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from oceanloc.estimation.gaussian import Gaussian, symmetrize
+from oceanloc.estimation.gaussian import Gaussian, repair_covariance, symmetrize
 from oceanloc.models.measurements import wrap_angle_rad
 from oceanloc.models.motion import LinearMotionModel
 
@@ -51,7 +56,8 @@ class UpdateResult:
     dof : (B,) int
         Number of measurements used.
     repaired : (B,) bool
-        The covariance needed a positive-definite repair in this step (unscented filter; always False here).
+        A covariance of this step (the prediction, ``S`` or the posterior) was not symmetric positive
+        definite and was repaired; the posterior returned is symmetric positive definite either way.
     """
 
     state: Gaussian
@@ -130,25 +136,30 @@ def linear_update(
     noise_cov: ArrayLike,
     avail: BoolArray,
 ) -> UpdateResult:
-    """Kalman update given the innovation ``nu (B, m)`` and ``H (B, m, n)``; Joseph-form covariance."""
+    """Kalman update given the innovation ``nu (B, m)`` and ``H (B, m, n)``; Joseph-form covariance.
+
+    The prediction, ``S`` and the posterior are repaired where they are not symmetric positive definite
+    (flagged in ``repaired``).
+    """
     h = jacobian if avail.all() else np.where(avail[..., None], jacobian, 0.0)
     r = masked_noise(noise_cov, avail)
-    p = state.cov
+    p, repaired = repair_covariance(state.cov)
     hp = h @ p
-    s = symmetrize(hp @ np.swapaxes(h, -1, -2) + r)
+    s, s_repaired = repair_covariance(symmetrize(hp @ np.swapaxes(h, -1, -2) + r))
     # One solve for the gain and the NIS: S^-1 [H P | nu].
     sol = np.linalg.solve(s, np.concatenate([hp, nu[..., None]], axis=-1))
     k = np.swapaxes(sol[..., :-1], -1, -2)
     mean = state.mean + (k @ nu[..., None])[..., 0]
     a = np.eye(state.dim) - k @ h
     cov = a @ p @ np.swapaxes(a, -1, -2) + k @ r @ np.swapaxes(k, -1, -2)
+    cov, cov_repaired = repair_covariance(symmetrize(cov))
     return UpdateResult(
-        state=Gaussian(mean=mean, cov=symmetrize(cov)),
+        state=Gaussian(mean=mean, cov=cov),
         innovation=nu,
         innovation_cov=s,
-        nis=np.sum(nu * sol[..., -1], axis=-1),
+        nis=np.maximum(np.sum(nu * sol[..., -1], axis=-1), 0.0),
         dof=avail.sum(axis=-1),
-        repaired=np.zeros(state.batch_size, dtype=bool),
+        repaired=repaired | s_repaired | cov_repaired,
     )
 
 
@@ -243,12 +254,14 @@ def ekf_update_sequential(
     nus = np.zeros_like(zz)
     s_diag = np.ones_like(zz)
     current = state
+    repaired = np.zeros(state.batch_size, dtype=bool)
     for i in range(zz.shape[-1]):
         hi = hx(current.mean)[..., i : i + 1]
         nu = innovation(zz[..., i : i + 1], hi, avail[..., i : i + 1], am[i : i + 1])
         jac = jacobian_hx(current.mean)[..., i : i + 1, :]
         step = linear_update(current, nu, jac, var[..., i : i + 1, None], avail[..., i : i + 1])
         current = step.state
+        repaired |= step.repaired
         nus[..., i] = nu[..., 0]
         s_diag[..., i] = step.innovation_cov[..., 0, 0]
     s = np.einsum("bi,ij->bij", s_diag, np.eye(zz.shape[-1]))
@@ -258,5 +271,5 @@ def ekf_update_sequential(
         innovation_cov=s,
         nis=np.sum(nus**2 / s_diag, axis=-1),
         dof=avail.sum(axis=-1),
-        repaired=np.zeros(state.batch_size, dtype=bool),
+        repaired=repaired,
     )

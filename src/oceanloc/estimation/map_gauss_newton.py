@@ -20,6 +20,13 @@ Two additions the papers do not spell out:
   ``surface_z_m`` is reflected back below it before its cost is compared; the estimate never leaves the
   water. A prior mean drawn above the surface is reflected the same way before iterating.
 
+Bad input is refused, not iterated on: a prior mean or covariance with NaN or infinite values, or a prior
+covariance that is not symmetric positive definite (singular included), is a :class:`ConfigError` naming
+the problem and the offending values. A solution the data cannot define is reported, not called
+converged: when a measurement carries no information at the estimate although it disagrees with it (a
+range whose sensor sits on the estimate, where the range has no direction), the problem's ``status`` is
+``degenerate`` with a message saying which measurement.
+
 The solver is generic over small least-squares models (:class:`WhitenedModel`), batched over any number
 of independent problems (Monte Carlo runs times transponders), so other measurement models (two-way
 travel times, an unknown sound speed) reuse it.
@@ -32,7 +39,7 @@ from typing import Protocol
 
 import numpy as np
 
-from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrArray
 from oceanloc.errors import ConfigError
 from oceanloc.models.measurements import range_jacobian, range_m
 
@@ -99,6 +106,10 @@ class MapOptions:
             raise ConfigError(f"max_iterations must be at least 1, got {self.max_iterations}")
 
 
+MAP_STATUS: tuple[str, ...] = ("converged", "max-iterations", "degenerate", "non-finite")
+"""Values of :attr:`MapResult.status`."""
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class MapResult:
     """Result of a batch of MAP solves.
@@ -114,9 +125,17 @@ class MapResult:
     iterations : (B,) int
         Iterations used.
     converged : (B,) bool
-        True where the step-size test was met within ``max_iterations``.
+        True where the step-size test was met within ``max_iterations`` at a well-defined solution
+        (``status == "converged"``).
     cost : (B,) float
         Final ``J_MAP`` (eq. 14, with the factor 1/2).
+    status : (B,) str
+        One of :data:`MAP_STATUS`: ``converged``; ``max-iterations`` (the step test was not met);
+        ``degenerate`` (a measurement has no information at the estimate although it disagrees with it,
+        e.g. the estimate sits on the only sensor: not a solution); ``non-finite`` (the estimate or cost
+        is NaN or infinite).
+    message : (B,) str
+        Empty where converged; otherwise what happened, for a human.
     """
 
     estimate: FloatArray
@@ -125,6 +144,8 @@ class MapResult:
     iterations: IntArray
     converged: BoolArray
     cost: FloatArray
+    status: StrArray
+    message: StrArray
 
 
 @dataclass(frozen=True, slots=True)
@@ -204,6 +225,14 @@ def solve_map(
     Returns
     -------
     MapResult
+        Per problem a ``status`` and ``message``: a degenerate geometry (the estimate on the only sensor)
+        is reported there, never as converged.
+
+    Raises
+    ------
+    ConfigError
+        If a prior mean or covariance holds NaN or infinite values, or a prior covariance is not
+        symmetric positive definite (singular included), naming the problem.
     """
     opts = options or MapOptions()
     mean = np.atleast_2d(np.asarray(prior.mean, dtype=float))
@@ -211,7 +240,7 @@ def solve_map(
     if problem.batch_size != batch:
         raise ConfigError(f"prior has {batch} problems but the measurements have {problem.batch_size}")
     cov = np.broadcast_to(np.asarray(prior.cov, dtype=float), (batch, dim, dim))
-    prior_info = np.linalg.inv(cov)
+    prior_info = _prior_information(mean, cov)
     x = _to_water(mean.copy() if initial is None else np.array(initial, dtype=float), opts)
 
     all_rows = np.arange(batch)
@@ -249,14 +278,68 @@ def solve_map(
     information = np.einsum("bni,bnj->bij", jac, jac) + prior_info
     covariance = np.linalg.inv(information)
     covariance = 0.5 * (covariance + np.swapaxes(covariance, -1, -2))
+    # A measurement that disagrees with the estimate but has no derivative there (a range from a sensor
+    # at the estimate) leaves the step at zero without the estimate being a minimum.
+    blind = np.all(jac == 0.0, axis=-1) & (resid != 0.0)
+    degenerate = blind.any(axis=-1)
+    finite = np.all(np.isfinite(x), axis=-1) & np.isfinite(cost)
+    status = np.where(converged, "converged", "max-iterations").astype("<U14")
+    status[degenerate] = "degenerate"
+    status[~finite] = "non-finite"
+    message = np.full(batch, "", dtype=object)
+    message[status == "max-iterations"] = f"step test not met in {opts.max_iterations} iterations"
+    for b in np.flatnonzero(degenerate & finite):
+        i = int(np.argmax(blind[b]))
+        message[b] = (
+            f"measurement {i} has no information at the estimate although it disagrees with it (for a "
+            "range: the estimate is on its sensor); not a solution - start elsewhere or add measurements"
+        )
+    message[~finite] = "the estimate or its cost is NaN or infinite"
     return MapResult(
         estimate=x,
         covariance=covariance,
         information=information,
         iterations=iterations,
-        converged=converged,
+        converged=status == "converged",
         cost=cost,
+        status=status,
+        message=message.astype(str),
     )
+
+
+def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:
+    """The prior information matrices ``P0^-1``; ConfigError for a prior that is not a valid Gaussian."""
+    bad = ~np.all(np.isfinite(mean), axis=-1)
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ConfigError(f"prior mean of problem {b} holds NaN or infinite values: {mean[b].tolist()}")
+    bad = ~np.all(np.isfinite(cov), axis=(-1, -2))
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ConfigError(
+            f"prior covariance of problem {b} holds NaN or infinite values (a sigma beyond 1e154 m "
+            f"overflows): diagonal {np.diagonal(cov[b]).tolist()} m^2"
+        )
+    scale = np.max(np.abs(cov), axis=(-1, -2))
+    bad = np.max(np.abs(cov - np.swapaxes(cov, -1, -2)), axis=(-1, -2)) > 1e-9 * scale
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ConfigError(f"prior covariance of problem {b} is not symmetric: {cov[b].tolist()} m^2")
+    w = np.linalg.eigvalsh(cov)
+    bad = ~(w[:, 0] > 1e-15 * w[:, -1])
+    if bad.any():
+        b = int(np.argmax(bad))
+        kind = "singular" if w[b, 0] >= 0.0 else "not positive definite"
+        raise ConfigError(
+            f"prior covariance of problem {b} is {kind} (eigenvalues {', '.join(f'{v:.3g}' for v in w[b])} "
+            "m^2; every prior sigma must be positive, and the matrix positive definite)"
+        )
+    info = np.linalg.inv(cov)
+    bad = ~np.all(np.isfinite(info), axis=(-1, -2))
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ConfigError(f"prior covariance of problem {b} is too small to invert: {cov[b].tolist()} m^2")
+    return info
 
 
 def _cost(

@@ -176,7 +176,8 @@ def estimate_delay(
     sample_rate_hz : float
     method : {"xcorr", "gcc-phat"}
     max_delay_s : float, optional
-        Search only ``|delay| <= max_delay_s`` (e.g. the node separation over the sound speed).
+        Search only ``|delay| <= max_delay_s`` (e.g. the node separation over the sound speed). Each
+        recording must last at least twice that (a DataError otherwise).
     band_hz : (low, high), optional
         Use only this frequency band (e.g. the sweep's band), removing out-of-band noise.
     interpolation : {"sinc", "parabolic", "none"}
@@ -222,6 +223,15 @@ def estimate_delay(
         window = np.abs(lags) <= max_delay_s * sample_rate_hz
         if window.sum() < 3:
             raise ConfigError(f"max delay {max_delay_s} s is shorter than a sample at {sample_rate_hz:g} Hz")
+        shortest = min(x.size, y.size) / sample_rate_hz
+        if shortest < 2.0 * max_delay_s:
+            # At a lag near the recording's length the two overlap by a few samples: no delay there is
+            # measured, so a search that reaches it is not answered.
+            raise DataError(
+                f"recordings of {x.size / sample_rate_hz:.6g} s and {y.size / sample_rate_hz:.6g} s are too "
+                f"short for a delay search of +-{max_delay_s:g} s: each must last at least "
+                f"{2.0 * max_delay_s:g} s (twice the search window); record longer or search a shorter delay"
+            )
     search = np.where(window, values, -np.inf)
     i = int(np.argmax(search))
     peak = float(lags[i])

@@ -14,9 +14,11 @@ Numerical choices:
 - Angle components (``angle_mask``, e.g. bearings) are averaged on the circle: the differences to the
   central point are wrapped to ``(-pi, pi]`` before weighting, and every residual is wrapped, so sigma points
   straddling +-180 degrees give the right mean and spread.
-- A covariance whose Cholesky factorization fails is repaired by eigenvalue clipping
-  (:func:`oceanloc.estimation.gaussian.robust_cholesky`) and the track is flagged (``repaired``) instead of
-  the filter raising mid-track.
+- A covariance that is not symmetric positive definite (the prior, ``S``, the posterior or the
+  prediction) is repaired by symmetrizing and eigenvalue clipping
+  (:func:`oceanloc.estimation.gaussian.repair_covariance`) and the track is flagged (``repaired``) instead
+  of the filter raising mid-track; the repaired prior is the one the sigma points and the posterior
+  ``P - K S K^T`` use, so every covariance returned is symmetric positive definite.
 - :func:`ukf_predict` returns the propagated sigma points. :func:`ukf_update` draws fresh sigma points
   from the predicted Gaussian by default (so that on a linear problem the UKF equals the Kalman filter
   exactly); passing the propagated points (``sigma_points=``) reproduces the thesis' listing and FilterPy,
@@ -31,7 +33,7 @@ import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray
 from oceanloc.errors import ConfigError
-from oceanloc.estimation.gaussian import Gaussian, robust_cholesky, symmetrize
+from oceanloc.estimation.gaussian import Gaussian, repair_covariance, robust_cholesky, symmetrize
 from oceanloc.estimation.kalman import (
     StateFunction,
     UpdateResult,
@@ -159,14 +161,19 @@ def ukf_predict(
         Additive ``Q``.
     params : SigmaPointParams
     """
-    points, repaired = sigma_points(state, params)
+    cov_in, repaired = repair_covariance(state.cov)
+    points, chol_repaired = sigma_points(Gaussian(mean=state.mean, cov=cov_in), params)
     wm, wc = params.weights(state.dim)
     moved = fx(points)
     mean = weighted_mean(moved, wm)
     dev = deviations(moved, mean)
-    cov = weighted_outer(wc, dev, dev) + np.asarray(process_noise, dtype=float)
+    cov, cov_repaired = repair_covariance(
+        symmetrize(weighted_outer(wc, dev, dev) + np.asarray(process_noise, dtype=float))
+    )
     return UkfPrediction(
-        state=Gaussian(mean=mean, cov=symmetrize(cov)), sigma_points=moved, repaired=repaired
+        state=Gaussian(mean=mean, cov=cov),
+        sigma_points=moved,
+        repaired=repaired | chol_repaired | cov_repaired,
     )
 
 
@@ -203,28 +210,31 @@ def ukf_update(
     """
     zz = np.asarray(z, dtype=float)
     avail = measurement_mask(zz, mask)
+    cov_in, repaired = repair_covariance(state.cov)
+    state = Gaussian(mean=state.mean, cov=cov_in)
     if propagated_points is None:
-        points, repaired = sigma_points(state, params)
+        points, chol_repaired = sigma_points(state, params)
+        repaired = repaired | chol_repaired
     else:
-        points, repaired = propagated_points, np.zeros(state.batch_size, dtype=bool)
+        points = propagated_points
     wm, wc = params.weights(state.dim)
     zs = hx(points)
     z_pred = weighted_mean(zs, wm, angle_mask)
     dz = np.where(avail[:, None, :], deviations(zs, z_pred, angle_mask), 0.0)
     dx = deviations(points, state.mean)
-    s = symmetrize(weighted_outer(wc, dz, dz) + masked_noise(noise_cov, avail))
+    s, s_repaired = repair_covariance(symmetrize(weighted_outer(wc, dz, dz) + masked_noise(noise_cov, avail)))
     pxz = weighted_outer(wc, dx, dz)
     nu = innovation(zz, z_pred, avail, angle_mask)
     # One solve for the gain and the NIS: S^-1 [Pxz^T | nu].
     sol = np.linalg.solve(s, np.concatenate([np.swapaxes(pxz, -1, -2), nu[..., None]], axis=-1))
     k = np.swapaxes(sol[..., :-1], -1, -2)
     mean = state.mean + (k @ nu[..., None])[..., 0]
-    cov = symmetrize(state.cov - k @ s @ np.swapaxes(k, -1, -2))
+    cov, cov_repaired = repair_covariance(symmetrize(state.cov - k @ s @ np.swapaxes(k, -1, -2)))
     return UpdateResult(
         state=Gaussian(mean=mean, cov=cov),
         innovation=nu,
         innovation_cov=s,
-        nis=np.sum(nu * sol[..., -1], axis=-1),
+        nis=np.maximum(np.sum(nu * sol[..., -1], axis=-1), 0.0),
         dof=avail.sum(axis=-1),
-        repaired=repaired,
+        repaired=repaired | s_repaired | cov_repaired,
     )

@@ -10,28 +10,56 @@ state read back is ordered by time, hence identical however often a stream is re
 A journal in use by ``oceanloc survey`` is *started* (:meth:`Journal.start`): its ``meta`` table holds
 the format marker and the survey settings (strings, written in one transaction). :meth:`Journal.open`
 opens only a started journal and never creates or modifies a file that is not one.
+
+Nothing out of range goes in: every time, position, height, beacon id, range and heading is checked
+against :mod:`oceanloc.io.qc`'s physical ranges before it is written (:func:`fix_problem`,
+:func:`range_problem`, :func:`heading_problem`), and the append functions check a whole log before its
+first write. Should a bad record be in a journal anyway (written by an older version or by hand), the
+readers skip it and report it (:attr:`JournalRecords.invalid`, a logged warning), so every command still
+works, and :meth:`Journal.remove_invalid` deletes it. SQLite failures are :class:`JournalError` naming
+the journal: damaged pages, a read-only folder, a lock held past the timeout.
 """
 
 from __future__ import annotations
 
+import logging
 import math
+import os
 import sqlite3
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from oceanloc._typing import FloatArray, IntArray
+from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import DataError
 from oceanloc.io.nmea import GpsLog
-from oceanloc.io.qc import QcReport
+from oceanloc.io.qc import (
+    BEACON_ID_RANGE,
+    HEIGHT_RANGE_M,
+    LAT_RANGE_DEG,
+    MAX_RANGE_M,
+    TIME_RANGE_UNIX_S,
+    QcReport,
+    out_of_range,
+    time_problem,
+)
 from oceanloc.io.usbl import RangeLog
 
 FORMAT_KEY = "format"
 JOURNAL_FORMAT = "oceanloc-survey-journal 1"
 """Value of the ``format`` meta key of a started journal."""
 
+_LOG = logging.getLogger(__name__)
+
+JOURNAL_LON_RANGE_DEG: tuple[float, float] = (-180.0, 360.0)
+"""Longitudes the journal stores, degrees (east of Greenwich up to 360 is accepted as well)."""
+
+HEADING_RANGE_DEG: tuple[float, float] = (0.0, 360.0)
+"""True headings the journal stores, degrees clockwise from north."""
+
+_SQLITE_MAGIC = b"SQLite format 3\x00"
 _TABLES = {"meta", "fixes", "ranges", "headings"}
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -41,6 +69,124 @@ CREATE TABLE IF NOT EXISTS ranges (t REAL NOT NULL, beacon INTEGER NOT NULL, ran
 CREATE TABLE IF NOT EXISTS headings (t REAL NOT NULL, seq INTEGER NOT NULL, heading_deg REAL NOT NULL,
                                      PRIMARY KEY (t, seq));
 """
+
+
+class JournalError(DataError):
+    """The journal file cannot be read or written: damaged, read-only, locked or not a journal."""
+
+
+def _num(x: object) -> float:
+    """``float(x)``, or NaN when it is not a number (a huge integer, text, None)."""
+    try:
+        return float(x)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        return math.nan
+
+
+def _time_problem(t: object) -> str | None:
+    return time_problem(_num(t))
+
+
+def fix_problem(t_unix_s: object, lat_deg: object, lon_deg: object, h_m: object) -> str | None:
+    """None if a fix may be stored, else what is wrong with it (the field, its value, the allowed range)."""
+    return (
+        _time_problem(t_unix_s)
+        or out_of_range("latitude", _num(lat_deg), LAT_RANGE_DEG, "deg")
+        or out_of_range("longitude", _num(lon_deg), JOURNAL_LON_RANGE_DEG, "deg")
+        or out_of_range("height", _num(h_m), HEIGHT_RANGE_M, "m")
+    )
+
+
+def _beacon_problem(beacon: object) -> str | None:
+    lo, hi = BEACON_ID_RANGE
+    if isinstance(beacon, (int, np.integer)) and not isinstance(beacon, bool) and lo <= beacon <= hi:
+        return None
+    shown = str(beacon)
+    shown = shown if len(shown) <= 24 else f"{shown[:10]}...{shown[-6:]} ({len(shown)} characters)"
+    return f"beacon id {shown} is not an integer in [{lo}, {hi}]"
+
+
+def range_problem(t_unix_s: object, beacon: object, range_m: object) -> str | None:
+    """None if a range may be stored, else what is wrong with it (the field, its value, the allowed range)."""
+    if problem := _time_problem(t_unix_s) or _beacon_problem(beacon):
+        return problem
+    r = _num(range_m)
+    if not (math.isfinite(r) and 0.0 < r <= MAX_RANGE_M):
+        return f"range {r:.12g} m is not in (0, {MAX_RANGE_M:g}] m"
+    return None
+
+
+def heading_problem(t_unix_s: object, seq: object, heading_deg: object) -> str | None:
+    """None if a heading may be stored, else what is wrong with it."""
+    if problem := _time_problem(t_unix_s):
+        return problem
+    if not (isinstance(seq, (int, np.integer)) and 0 <= seq <= BEACON_ID_RANGE[1]):
+        return f"heading order {seq} is not an integer in [0, {BEACON_ID_RANGE[1]}]"
+    return out_of_range("heading", _num(heading_deg), HEADING_RANGE_DEG, "deg")
+
+
+def _sql_in(column: str, bounds: tuple[float, float], *, open_low: bool = False) -> str:
+    """SQL true only for a number in the bounds (false for NULL, text, blobs, inf beyond them)."""
+    low = f"{column} > {bounds[0]!r}" if open_low else f"{column} >= {bounds[0]!r}"
+    return f"(typeof({column}) IN ('real', 'integer') AND {low} AND {column} <= {bounds[1]!r})"
+
+
+_VALID_SQL: dict[str, str] = {
+    "fixes": " AND ".join(
+        [
+            _sql_in("t", TIME_RANGE_UNIX_S),
+            _sql_in("lat", LAT_RANGE_DEG),
+            _sql_in("lon", JOURNAL_LON_RANGE_DEG),
+            _sql_in("h", HEIGHT_RANGE_M),
+        ]
+    ),
+    "ranges": " AND ".join(
+        [
+            _sql_in("t", TIME_RANGE_UNIX_S),
+            "typeof(beacon) = 'integer'",
+            _sql_in("beacon", (float(BEACON_ID_RANGE[0]), float(BEACON_ID_RANGE[1]))),
+            _sql_in("range_m", (0.0, MAX_RANGE_M), open_low=True),
+        ]
+    ),
+    "headings": " AND ".join(
+        [
+            _sql_in("t", TIME_RANGE_UNIX_S),
+            "typeof(seq) = 'integer'",
+            _sql_in("seq", (0.0, float(BEACON_ID_RANGE[1]))),
+            _sql_in("heading_deg", HEADING_RANGE_DEG),
+        ]
+    ),
+}
+"""Per table, the SQL condition a stored row must meet to be read (the same checks as on the way in)."""
+
+_COLUMNS = {"fixes": "t, lat, lon, h", "ranges": "t, beacon, range_m", "headings": "t, seq, heading_deg"}
+_ORDER = {"fixes": "t", "ranges": "t, beacon", "headings": "t, seq"}
+_PROBLEM = {"fixes": fix_problem, "ranges": range_problem, "headings": heading_problem}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class InvalidRecord:
+    """A stored row that fails the checks on the way in (never written by this version; skipped on reading).
+
+    Attributes
+    ----------
+    table : str
+        ``fixes``, ``ranges`` or ``headings``.
+    rowid : int
+        SQLite rowid (what :meth:`Journal.remove_invalid` deletes).
+    values : tuple
+        The stored values, as stored.
+    problem : str
+        What is wrong (the field, its value, the allowed range).
+    """
+
+    table: str
+    rowid: int
+    values: tuple
+    problem: str
+
+    def __str__(self) -> str:
+        return f"{self.table} row {self.rowid} {self.values}: {self.problem}"
 
 
 class Journal:
@@ -75,27 +221,73 @@ class Journal:
                 uri = f"{self.path.resolve().as_uri()}?mode=rw"
                 self._db = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=timeout_s)
         except sqlite3.Error as exc:
-            raise DataError(f"{self.path}: cannot open as a survey journal ({exc})") from None
+            raise JournalError(self._explain(exc, "cannot open as a survey journal")) from None
         try:
             # Look before writing anything: WAL mode and our tables must not be forced on a foreign file.
             names = {r[0] for r in self._db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
             foreign = names - _TABLES
             if foreign:
-                raise DataError(
+                raise JournalError(
                     f"{self.path}: not a survey journal (an SQLite database with tables "
                     f"{', '.join(sorted(foreign))})"
                 )
             if not create and not {"meta", "fixes", "ranges"} <= names:
-                raise DataError(f"{self.path}: not a survey journal (no journal tables)")
+                raise JournalError(f"{self.path}: not a survey journal (no journal tables)")
             self._db.execute("PRAGMA journal_mode=WAL")
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.executescript(_SCHEMA)
-        except sqlite3.DatabaseError as exc:
+        except sqlite3.Error as exc:
             self._db.close()
-            raise DataError(f"{self.path}: not a survey journal ({exc})") from None
+            raise JournalError(self._explain(exc, "not a survey journal")) from None
         except DataError:
             self._db.close()
             raise
+
+    def _read_only_reason(self) -> str | None:
+        """Why SQLite cannot write here (a read-only folder or file), or None."""
+        folder = self.path.parent if str(self.path.parent) else Path(".")
+        if not os.access(folder, os.W_OK):
+            return (
+                f"the folder {folder} is read-only (a journal needs to create {self.path.name}-wal and "
+                f"{self.path.name}-shm beside it); copy the journal to a writable folder"
+            )
+        if self.path.exists() and not os.access(self.path, os.W_OK):
+            return "the file is read-only; make it writable or copy it"
+        return None
+
+    def _looks_like_sqlite(self) -> bool:
+        try:
+            with self.path.open("rb") as f:
+                return f.read(len(_SQLITE_MAGIC)) == _SQLITE_MAGIC
+        except OSError:
+            return False
+
+    def _explain(self, exc: sqlite3.Error, what: str) -> str:
+        """One-line message for an SQLite failure: read-only, damaged, locked, else ``what`` and SQLite's."""
+        name = getattr(exc, "sqlite_errorname", "")
+        denied = name.startswith(("SQLITE_READONLY", "SQLITE_CANTOPEN", "SQLITE_PERM"))
+        denied = denied or "readonly" in str(exc)
+        if denied and (reason := self._read_only_reason()):
+            return f"{self.path}: cannot use the journal: {reason}"
+        if name.startswith("SQLITE_CORRUPT") or (
+            name.startswith("SQLITE_NOTADB") and self._looks_like_sqlite()
+        ):
+            return (
+                f"{self.path}: the journal file is damaged ({exc}); nothing was changed. Keep a copy, then "
+                f"recover what can be read with `sqlite3 {self.path.name} .recover`"
+            )
+        if name.startswith(("SQLITE_BUSY", "SQLITE_LOCKED")):
+            return f"{self.path}: {what} ({exc}); another process holds the journal, try again"
+        if name.startswith(("SQLITE_FULL", "SQLITE_IOERR")):
+            return f"{self.path}: {what} ({exc}); check the disk"
+        return f"{self.path}: {what} ({exc})"
+
+    def _query(self, sql: str, params: tuple = ()) -> list[tuple]:
+        """All rows of one read; SQLite failures (a damaged page, ...) are :class:`JournalError`."""
+        try:
+            return self._db.execute(sql, params).fetchall()
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
 
     @classmethod
     def start(cls, path: str | Path, meta: Mapping[str, str]) -> Journal:
@@ -109,7 +301,7 @@ class Journal:
         journal = cls(path, create=True)
         if FORMAT_KEY in journal.meta():
             journal.close()
-            raise DataError(f"{journal.path}: survey already started; start a new survey in a new file")
+            raise JournalError(f"{journal.path}: survey already started; start a new survey in a new file")
         journal.set_meta_many({**meta, FORMAT_KEY: JOURNAL_FORMAT})
         return journal
 
@@ -146,7 +338,7 @@ class Journal:
         self._write("INSERT OR REPLACE INTO meta VALUES (?, ?)", [(k, str(v)) for k, v in items.items()])
 
     def meta(self) -> dict[str, str]:
-        return dict(self._db.execute("SELECT key, value FROM meta").fetchall())
+        return dict(self._query("SELECT key, value FROM meta"))
 
     def add_fix(self, t_unix_s: float, lat_deg: float, lon_deg: float, h_m: float) -> bool:
         """Append one GPS fix in its own transaction; False if a fix at that time was already stored.
@@ -154,21 +346,24 @@ class Journal:
         Raises
         ------
         DataError
-            On a NaN or infinite value, or a latitude or longitude out of range (naming the field).
+            On a value out of range (see :func:`fix_problem`), naming the field and the allowed range;
+            nothing is written.
         """
+        if problem := fix_problem(t_unix_s, lat_deg, lon_deg, h_m):
+            raise DataError(f"fix at {_num(t_unix_s):.12g} s: {problem}")
         values = (float(t_unix_s), float(lat_deg), float(lon_deg), float(h_m))
-        if not all(np.isfinite(values)):
-            raise DataError(f"fix at {t_unix_s}: NaN or infinite value")
-        if not -90.0 <= values[1] <= 90.0:
-            raise DataError(f"fix at {t_unix_s}: latitude {lat_deg} deg is outside [-90, 90]")
-        if not -180.0 <= values[2] <= 360.0:
-            raise DataError(f"fix at {t_unix_s}: longitude {lon_deg} deg is outside [-180, 360]")
         return self._write("INSERT OR IGNORE INTO fixes VALUES (?, ?, ?, ?)", [values]) == 1
 
     def add_range(self, t_unix_s: float, beacon: int, range_m: float) -> bool:
-        """Append one range in its own transaction; False if a range at that time and beacon was stored."""
-        if not (np.isfinite(range_m) and range_m > 0.0 and np.isfinite(t_unix_s)):
-            raise DataError(f"range at {t_unix_s}: negative, NaN or infinite value {range_m}")
+        """Append one range in its own transaction; False if a range at that time and beacon was stored.
+
+        Raises
+        ------
+        DataError
+            On a value out of range (see :func:`range_problem`); nothing is written.
+        """
+        if problem := range_problem(t_unix_s, beacon, range_m):
+            raise DataError(f"range at {_num(t_unix_s):.12g} s: {problem}")
         row = (float(t_unix_s), int(beacon), float(range_m))
         return self._write("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", [row]) == 1
 
@@ -177,9 +372,14 @@ class Journal:
 
         ``t_unix_s`` is the time of the fix the HDT sentence follows, ``seq`` its order after that fix
         (0 for the first); False if already stored.
+
+        Raises
+        ------
+        DataError
+            On a value out of range (see :func:`heading_problem`); nothing is written.
         """
-        if not (math.isfinite(t_unix_s) and math.isfinite(heading_deg)):
-            raise DataError(f"heading at {t_unix_s}: NaN or infinite value {heading_deg}")
+        if problem := heading_problem(t_unix_s, seq, heading_deg):
+            raise DataError(f"heading at {_num(t_unix_s):.12g} s: {problem}")
         row = (float(t_unix_s), int(seq), float(heading_deg))
         return self._write("INSERT OR IGNORE INTO headings VALUES (?, ?, ?)", [row]) == 1
 
@@ -195,41 +395,104 @@ class Journal:
                 self._db.execute("BEGIN IMMEDIATE")
                 cur = self._db.executemany(sql, rows)
         except sqlite3.Error as exc:
-            raise DataError(f"{self.path}: cannot write to the journal ({exc})") from None
+            raise JournalError(self._explain(exc, "cannot write to the journal")) from None
         return cur.rowcount
 
     def fix_at(self, t_unix_s: float) -> tuple[float, float, float] | None:
         """The stored fix (lat, lon, h) at that time, if any."""
-        row = self._db.execute("SELECT lat, lon, h FROM fixes WHERE t = ?", (float(t_unix_s),)).fetchone()
-        return None if row is None else tuple(row)
+        rows = self._query("SELECT lat, lon, h FROM fixes WHERE t = ?", (_num(t_unix_s),))
+        return tuple(rows[0]) if rows else None
 
     def range_at(self, t_unix_s: float, beacon: int) -> float | None:
         """The stored range at that time to that beacon, if any."""
-        row = self._db.execute(
-            "SELECT range_m FROM ranges WHERE t = ? AND beacon = ?", (float(t_unix_s), int(beacon))
-        ).fetchone()
-        return None if row is None else float(row[0])
+        if _beacon_problem(beacon):
+            return None
+        rows = self._query(
+            "SELECT range_m FROM ranges WHERE t = ? AND beacon = ?", (_num(t_unix_s), int(beacon))
+        )
+        return float(rows[0][0]) if rows else None
+
+    def heading_at(self, t_unix_s: float, seq: int) -> float | None:
+        """The stored heading (deg) after the fix at that time with that order, if any."""
+        rows = self._query(
+            "SELECT heading_deg FROM headings WHERE t = ? AND seq = ?", (_num(t_unix_s), int(seq))
+        )
+        return float(rows[0][0]) if rows else None
+
+    def _valid(self, table: str) -> FloatArray:
+        where, order = f"IFNULL({_VALID_SQL[table]}, 0)", _ORDER[table]
+        rows = self._query(f"SELECT {_COLUMNS[table]} FROM {table} WHERE {where} ORDER BY {order}")
+        return np.asarray(rows, dtype=float).reshape(-1, 3 + (table == "fixes"))
 
     def fixes(self) -> FloatArray:
-        """All fixes ordered by time, ``(n, 4)``: t, lat, lon, h."""
-        rows = self._db.execute("SELECT t, lat, lon, h FROM fixes ORDER BY t").fetchall()
-        return np.asarray(rows, dtype=float).reshape(-1, 4)
+        """All valid fixes ordered by time, ``(n, 4)``: t, lat, lon, h (see :meth:`invalid_records`)."""
+        return self._valid("fixes")
 
     def ranges(self) -> FloatArray:
-        """All ranges ordered by time and beacon, ``(m, 3)``: t, beacon, range."""
-        rows = self._db.execute("SELECT t, beacon, range_m FROM ranges ORDER BY t, beacon").fetchall()
-        return np.asarray(rows, dtype=float).reshape(-1, 3)
+        """All valid ranges ordered by time and beacon, ``(m, 3)``: t, beacon, range."""
+        return self._valid("ranges")
 
     def headings(self) -> FloatArray:
-        """All headings ordered by time and order, ``(h, 3)``: t, seq, heading (deg from north)."""
-        rows = self._db.execute("SELECT t, seq, heading_deg FROM headings ORDER BY t, seq").fetchall()
-        return np.asarray(rows, dtype=float).reshape(-1, 3)
+        """All valid headings ordered by time and order, ``(h, 3)``: t, seq, heading (deg from north)."""
+        return self._valid("headings")
+
+    def invalid_records(self) -> list[InvalidRecord]:
+        """Every stored row that fails the checks on the way in (out of range, not a number), by table."""
+        out = []
+        for table in ("fixes", "headings", "ranges"):
+            rows = self._query(
+                f"SELECT rowid, {_COLUMNS[table]} FROM {table} WHERE NOT IFNULL({_VALID_SQL[table]}, 0) "
+                "ORDER BY rowid"
+            )
+            for rowid, *values in rows:
+                problem = _PROBLEM[table](*values) or "not a number of the column's type"
+                out.append(
+                    InvalidRecord(table=table, rowid=int(rowid), values=tuple(values), problem=problem)
+                )
+        return out
+
+    def remove_invalid(self) -> list[InvalidRecord]:
+        """Delete every invalid stored row (:meth:`invalid_records`) in one transaction; returns them.
+
+        Valid records are never touched; a second call removes nothing.
+        """
+        bad = self.invalid_records()
+        for table in ("fixes", "headings", "ranges"):
+            ids = [(r.rowid,) for r in bad if r.table == table]
+            if ids:
+                self._write(f"DELETE FROM {table} WHERE rowid = ?", ids)
+        return bad
+
+    def check(self) -> list[str]:
+        """Problems of the journal file: SQLite's ``quick_check`` of every page, then the invalid records.
+
+        An empty list means every page is readable and every record valid.
+        """
+        pages = [r[0] for r in self._query("PRAGMA quick_check")]
+        problems = [] if pages == ["ok"] else [f"{self.path}: damaged: {p}" for p in pages]
+        return problems + [f"{self.path}: {r}" for r in self.invalid_records()]
 
     def records(self) -> JournalRecords:
-        """Everything recorded, read in one read transaction (a consistent snapshot)."""
-        with self._db:
-            self._db.execute("BEGIN")
-            fixes, ranges, headings = self.fixes(), self.ranges(), self.headings()
+        """Every valid record, read in one read transaction (a consistent snapshot).
+
+        Invalid stored rows (see :meth:`invalid_records`) are skipped, listed in
+        :attr:`JournalRecords.invalid` and reported once as a logged warning, so every command reading the
+        journal still works.
+        """
+        try:
+            with self._db:
+                self._db.execute("BEGIN")
+                fixes, ranges, headings = self.fixes(), self.ranges(), self.headings()
+                invalid = self.invalid_records()
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        if invalid:
+            _LOG.warning(
+                "%s: %d invalid record(s) skipped (first: %s); Journal.remove_invalid() deletes them",
+                self.path,
+                len(invalid),
+                invalid[0],
+            )
         return JournalRecords(
             fix_t_unix_s=fixes[:, 0],
             lat_deg=fixes[:, 1],
@@ -240,6 +503,7 @@ class Journal:
             range_m=ranges[:, 2],
             heading_t_unix_s=headings[:, 0],
             heading_deg=headings[:, 2],
+            invalid=tuple(str(r) for r in invalid),
         )
 
 
@@ -256,6 +520,9 @@ class JournalRecords:
     range_m : (m,) float
     heading_t_unix_s, heading_deg : (h,) float
         HDT true headings (degrees clockwise from north) and the time of the fix each follows.
+    invalid : tuple of str
+        Stored rows skipped because they fail the checks on the way in (see
+        :meth:`Journal.invalid_records`); empty for a journal written by this version.
     """
 
     fix_t_unix_s: FloatArray
@@ -267,6 +534,7 @@ class JournalRecords:
     range_m: FloatArray
     heading_t_unix_s: FloatArray
     heading_deg: FloatArray
+    invalid: tuple[str, ...] = ()
 
     @property
     def n_fixes(self) -> int:
@@ -313,22 +581,45 @@ class AppendCounts:
     already_stored : int
         Records identical to one already in the journal (idempotent re-add; nothing written).
     conflicting : int
-        Records whose key (time, beacon) is stored with another value: kept as stored, listed in the QC
-        report as ``duplicate record``.
+        Records whose key (fix: time; heading: time and order; range: time and beacon) is stored with
+        another value: kept as stored, listed in the QC report as ``duplicate record`` with both values.
+    rejected : int
+        Records failing the checks on the way in (out of range): not written, listed in the QC report as
+        ``out of range``.
     """
 
     kind: str
     new: int
     already_stored: int
     conflicting: int = 0
+    rejected: int = 0
 
     @property
     def offered(self) -> int:
-        return self.new + self.already_stored + self.conflicting
+        return self.new + self.already_stored + self.conflicting + self.rejected
 
     def __str__(self) -> str:
         text = f"{self.offered} {self.kind} ({self.new} new, {self.already_stored} already stored"
-        return text + (f", {self.conflicting} conflicting)" if self.conflicting else ")")
+        text += f", {self.conflicting} conflicting" if self.conflicting else ""
+        return text + (f", {self.rejected} rejected)" if self.rejected else ")")
+
+
+def _inside(a: FloatArray, bounds: tuple[float, float]) -> BoolArray:
+    return np.isfinite(a) & (a >= bounds[0]) & (a <= bounds[1])
+
+
+def _reject(
+    qc: QcReport,
+    source: str | Path,
+    lines: IntArray,
+    ok: BoolArray,
+    problem: Callable[..., str | None],
+    columns: tuple[np.ndarray, ...],
+) -> None:
+    """Record each rejected record (``~ok``) in ``qc`` with its line and what is wrong with it."""
+    for k in np.flatnonzero(~ok):
+        values = [c[k].item() for c in columns]
+        qc.add(source, int(lines[k]), "out of range", problem(*values) or "not a number")
 
 
 def append_gps_log(
@@ -336,62 +627,116 @@ def append_gps_log(
 ) -> tuple[AppendCounts, AppendCounts]:
     """Append a GPS log record by record, in log order: each fix, then the headings that follow it.
 
-    A heading read before any fix has no time (``-inf``) and is not stored. A fix whose time is stored with
-    another position is kept as stored and recorded in ``qc`` (``duplicate record``, naming
-    ``source`` and the line).
+    The whole log is checked before the first write: a fix or heading out of range (see
+    :func:`fix_problem`) is not written and is recorded in ``qc`` (``out of range``, naming ``source``
+    and the line). A heading read before any fix has no time (``-inf``) and is not stored. A fix or
+    heading whose key is stored with another value is kept as stored and recorded in ``qc``
+    (``duplicate record``, with both values).
 
     Returns
     -------
     (fix counts, heading counts)
     """
     qc = log.qc if qc is None else qc
-    fix_new = fix_old = fix_bad = 0
-    head_new = head_old = 0
+    fix_ok = (
+        _inside(log.t_unix_s, TIME_RANGE_UNIX_S)
+        & _inside(log.lat_deg, LAT_RANGE_DEG)
+        & _inside(log.lon_deg, JOURNAL_LON_RANGE_DEG)
+        & _inside(log.h_m, HEIGHT_RANGE_M)
+    )
     order = np.argsort(log.heading_t_unix_s, kind="stable")
     head_t, head_deg = log.heading_t_unix_s[order], log.heading_deg[order]
+    head_line = np.zeros(order.size, dtype=np.int64) if log.heading_line is None else log.heading_line[order]
     timed = np.isfinite(head_t)
-    head_t, head_deg = head_t[timed], head_deg[timed]
+    head_t, head_deg, head_line = head_t[timed], head_deg[timed], head_line[timed]
     # seq: a heading's order among those at the same time.
     first = np.searchsorted(head_t, head_t, side="left")
     seq = np.arange(head_t.size) - first
+    head_ok = _inside(head_t, TIME_RANGE_UNIX_S) & _inside(head_deg, HEADING_RANGE_DEG)
+    if not (fix_ok.all() and head_ok.all()):
+        _reject(qc, source, log.line, fix_ok, fix_problem, (log.t_unix_s, log.lat_deg, log.lon_deg, log.h_m))
+        _reject(qc, source, head_line, head_ok, heading_problem, (head_t, seq, head_deg))
+    fix_new = fix_old = fix_bad = 0
+    head_new = head_old = head_bad = 0
     j = 0
     for k in range(log.n_fixes + 1):
         if k < log.n_fixes:
             t = float(log.t_unix_s[k])
             values = (float(log.lat_deg[k]), float(log.lon_deg[k]), float(log.h_m[k]))
-            if journal.add_fix(t, *values):
+            if not fix_ok[k]:
+                pass
+            elif journal.add_fix(t, *values):
                 fix_new += 1
             elif (stored := journal.fix_at(t)) == values:
                 fix_old += 1
             else:
                 fix_bad += 1
                 qc.add(
-                    source, int(log.line[k]), "duplicate record", f"a fix at this time is stored: {stored}"
+                    source,
+                    int(log.line[k]),
+                    "duplicate record",
+                    f"a fix at this time is stored with other values: {stored}, this line {values}",
                 )
         end = head_t.size if k == log.n_fixes else int(np.searchsorted(head_t, t, side="right"))
         for i in range(j, end):
-            if journal.add_heading(float(head_t[i]), int(seq[i]), float(head_deg[i])):
+            h_t, h_seq, h_deg = float(head_t[i]), int(seq[i]), float(head_deg[i])
+            if not head_ok[i]:
+                continue
+            if journal.add_heading(h_t, h_seq, h_deg):
                 head_new += 1
-            else:
+            elif (stored_deg := journal.heading_at(h_t, h_seq)) == h_deg:
                 head_old += 1
+            else:
+                head_bad += 1
+                qc.add(
+                    source,
+                    int(head_line[i]),
+                    "duplicate record",
+                    f"heading {h_seq + 1} after the fix at {h_t:.3f} s is stored with {stored_deg} deg, "
+                    f"this line {h_deg} deg",
+                )
         j = max(j, end)
     return (
-        AppendCounts(kind="fixes", new=fix_new, already_stored=fix_old, conflicting=fix_bad),
-        AppendCounts(kind="headings", new=head_new, already_stored=head_old),
+        AppendCounts(
+            kind="fixes",
+            new=fix_new,
+            already_stored=fix_old,
+            conflicting=fix_bad,
+            rejected=int((~fix_ok).sum()),
+        ),
+        AppendCounts(
+            kind="headings",
+            new=head_new,
+            already_stored=head_old,
+            conflicting=head_bad,
+            rejected=int((~head_ok).sum()),
+        ),
     )
 
 
 def append_range_log(
     journal: Journal, log: RangeLog, source: str | Path, qc: QcReport | None = None
 ) -> AppendCounts:
-    """Append a range log record by record, in log order (see :func:`append_gps_log` on conflicts)."""
+    """Append a range log record by record, in log order; the whole log is checked before the first write
+    (see :func:`append_gps_log` on rejected and conflicting records)."""
     qc = log.qc if qc is None else qc
+    beacon = np.asarray(log.beacon)
+    ok = (
+        _inside(log.t_unix_s, TIME_RANGE_UNIX_S)
+        & (beacon >= BEACON_ID_RANGE[0])
+        & (beacon <= BEACON_ID_RANGE[1])
+        & np.isfinite(log.range_m)
+        & (log.range_m > 0.0)
+        & (log.range_m <= MAX_RANGE_M)
+    )
+    if not ok.all():
+        _reject(qc, source, log.line, ok, range_problem, (log.t_unix_s, beacon, log.range_m))
     new = old = bad = 0
-    for k in range(log.t_unix_s.size):
-        t, beacon, rng = float(log.t_unix_s[k]), int(log.beacon[k]), float(log.range_m[k])
-        if journal.add_range(t, beacon, rng):
+    for k in np.flatnonzero(ok):
+        t, b, rng = float(log.t_unix_s[k]), int(beacon[k]), float(log.range_m[k])
+        if journal.add_range(t, b, rng):
             new += 1
-        elif journal.range_at(t, beacon) == rng:
+        elif (stored := journal.range_at(t, b)) == rng:
             old += 1
         else:
             bad += 1
@@ -399,6 +744,8 @@ def append_range_log(
                 source,
                 int(log.line[k]),
                 "duplicate record",
-                f"beacon {beacon} at this time is stored with {journal.range_at(t, beacon)} m",
+                f"beacon {b} at this time is stored with {stored} m, this line {rng} m",
             )
-    return AppendCounts(kind="ranges", new=new, already_stored=old, conflicting=bad)
+    return AppendCounts(
+        kind="ranges", new=new, already_stored=old, conflicting=bad, rejected=int((~ok).sum())
+    )

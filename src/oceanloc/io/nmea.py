@@ -4,7 +4,8 @@ Every sentence's checksum is verified (a sentence without one is rejected too). 
 carries only the time of day, so the date comes from the latest RMC or ZDA before it (a GGA before any
 date is skipped with reason ``no date``). Positions are WGS84 latitude, longitude and ellipsoidal height
 (GGA altitude above the geoid plus the geoid separation). Fixes with quality 0 are skipped as
-``invalid fix``; fixes whose time does not advance are skipped as ``time going backwards``.
+``invalid fix``; fixes whose time does not advance are skipped as ``time going backwards``; a value
+outside its physical range (latitude, longitude, height, date, heading) is skipped as ``out of range``.
 
 Example::
 
@@ -16,6 +17,7 @@ Example::
 from __future__ import annotations
 
 import datetime as dt
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +26,16 @@ import pynmea2
 
 from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import DataError
-from oceanloc.io.qc import QcReport, read_lines
+from oceanloc.io.qc import (
+    HEIGHT_RANGE_M,
+    LAT_RANGE_DEG,
+    LON_RANGE_DEG,
+    TIME_RANGE_UNIX_S,
+    QcReport,
+    out_of_range,
+    read_lines,
+    time_problem,
+)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -42,6 +53,8 @@ class GpsLog:
     line : (n,) int
         Line number of each fix.
     qc : QcReport
+    heading_line : (h,) int or None
+        Line number of each heading (None when the headings do not come from a file).
     """
 
     t_unix_s: FloatArray
@@ -52,6 +65,7 @@ class GpsLog:
     heading_deg: FloatArray
     line: IntArray
     qc: QcReport
+    heading_line: IntArray | None = None
 
     @property
     def n_fixes(self) -> int:
@@ -60,6 +74,12 @@ class GpsLog:
 
 def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     """Read an NMEA 0183 log; bad lines are skipped and recorded (see the module docstring).
+
+    Every value used is range-checked before it is returned: a time of day that is not HH:MM:SS (such as
+    ``186000.00``, ``246060`` or ``nan``), a date outside 1980-2099, a latitude outside [-90, 90] deg or a
+    longitude outside [-180, 180] deg (or a hemisphere other than N/S, E/W), an ellipsoidal height
+    outside :data:`~oceanloc.io.qc.HEIGHT_RANGE_M` or a heading outside [0, 360] deg makes its line a QC
+    issue (``file:line: reason``), never a returned fix or an exception.
 
     Raises
     ------
@@ -71,7 +91,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     date: dt.date | None = None
     rows: list[tuple[float, float, float, float]] = []
     lines: list[int] = []
-    headings: list[tuple[float, float]] = []
+    headings: list[tuple[float, float, int]] = []
     last_t = -np.inf
     for number, text in read_lines(p, qc):
         start = text.find("$")
@@ -94,41 +114,29 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
         try:
             kind = msg.sentence_type
             if kind == "ZDA":
-                date = msg.datetime.date()
+                _checked_time(msg.timestamp)
+                date = _checked_date(msg.datetime.date())
                 continue
             if kind == "HDT":
-                heading = float(msg.heading)
-                if not np.isfinite(heading):
-                    raise ValueError("heading")
-                headings.append((last_t, heading))
+                headings.append((last_t, _checked_heading(msg.heading), number))
                 continue
             if kind == "RMC":
-                if msg.datestamp is not None:
-                    date = msg.datestamp
+                rmc_date = _rmc_date(msg)
+                if rmc_date is not None:
+                    date = rmc_date
                 if msg.status != "A":
                     qc.add(p, number, "invalid fix", "RMC status V")
                 continue  # positions come from GGA, which carries the height
             if kind != "GGA":
                 qc.add(p, number, "unsupported sentence", kind)
                 continue
-            if msg.timestamp is None or not msg.lat or not msg.lon:
-                qc.add(p, number, "truncated sentence", "empty time or position")
-                continue
-            if int(msg.gps_qual or 0) == 0:
-                qc.add(p, number, "invalid fix", "GGA quality 0")
-                continue
-            if date is None:
-                qc.add(p, number, "no date", "GGA before any RMC or ZDA")
-                continue
-            lat, lon = float(msg.latitude), float(msg.longitude)
-            h = float(msg.altitude) + float(msg.geo_sep or 0.0)
-        except (ValueError, TypeError, AttributeError) as exc:
+            t, lat, lon, h = _gga_fix(msg, date)
+        except _UnusableSentenceError as skip:
+            qc.add(p, number, skip.reason, skip.detail)
+            continue
+        except (ValueError, TypeError, AttributeError, OverflowError) as exc:
             qc.add(p, number, "non-numeric field", str(exc)[:60])
             continue
-        if not (np.isfinite(lat) and np.isfinite(lon) and np.isfinite(h)):
-            qc.add(p, number, "NaN or infinite value")
-            continue
-        t = dt.datetime.combine(date, msg.timestamp).replace(tzinfo=dt.UTC).timestamp()
         if t <= last_t:
             qc.add(p, number, "time going backwards", f"{t - last_t:+.2f} s")
             continue
@@ -139,7 +147,7 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     if not rows:
         raise DataError(f"{p}: no valid GPS fix ({qc.summary(max_lines=3)})")
     a = np.asarray(rows)
-    hd = np.asarray(headings).reshape(-1, 2)
+    hd = np.asarray(headings, dtype=float).reshape(-1, 3)
     return GpsLog(
         t_unix_s=a[:, 0],
         lat_deg=a[:, 1],
@@ -149,7 +157,95 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
         heading_deg=hd[:, 1],
         line=np.asarray(lines, dtype=np.int64),
         qc=qc,
+        heading_line=hd[:, 2].astype(np.int64),
     )
+
+
+class _UnusableSentenceError(Exception):
+    """A sentence that parses but cannot be used: its QC reason and detail."""
+
+    def __init__(self, reason: str, detail: str = "") -> None:
+        super().__init__(reason, detail)
+        self.reason, self.detail = reason, detail
+
+
+_FIRST_YEAR, _LAST_YEAR = (dt.datetime.fromtimestamp(t, tz=dt.UTC).year for t in TIME_RANGE_UNIX_S)
+
+
+def _checked_date(date: object) -> dt.date:
+    if not isinstance(date, dt.date):
+        raise _UnusableSentenceError("non-numeric field", f"date {str(date)[:20]!r}")
+    if not _FIRST_YEAR <= date.year < _LAST_YEAR:
+        raise _UnusableSentenceError(
+            "out of range", f"date {date.isoformat()} is outside {_FIRST_YEAR}-{_LAST_YEAR - 1}"
+        )
+    return date
+
+
+def _checked_time(stamp: object) -> dt.time:
+    # pynmea2 returns the raw text when the field is not a valid HHMMSS[.ss] time of day.
+    if not isinstance(stamp, dt.time):
+        raise _UnusableSentenceError(
+            "non-numeric field", f"time of day {str(stamp)[:20]!r} is not HHMMSS[.ss]"
+        )
+    return stamp
+
+
+def _checked_heading(text: object) -> float:
+    heading = float(text)  # type: ignore[arg-type]
+    if not math.isfinite(heading):
+        raise _UnusableSentenceError("NaN or infinite value", "heading")
+    if not 0.0 <= heading <= 360.0:
+        raise _UnusableSentenceError("out of range", f"heading {heading:g} deg is outside [0, 360] deg")
+    return heading
+
+
+def _checked_position(msg: pynmea2.NMEASentence) -> tuple[float, float]:
+    """Latitude and longitude of a GGA or RMC sentence, hemispheres and WGS84 ranges checked."""
+    if msg.lat_dir not in ("N", "S") or msg.lon_dir not in ("E", "W"):
+        raise _UnusableSentenceError(
+            "non-numeric field", f"hemisphere {msg.lat_dir!r}, {msg.lon_dir!r} (expected N/S, E/W)"
+        )
+    lat, lon = float(msg.latitude), float(msg.longitude)
+    if not (math.isfinite(lat) and math.isfinite(lon)):
+        raise _UnusableSentenceError("NaN or infinite value", "position")
+    for problem in (
+        out_of_range("latitude", lat, LAT_RANGE_DEG, "deg"),
+        out_of_range("longitude", lon, LON_RANGE_DEG, "deg"),
+    ):
+        if problem:
+            raise _UnusableSentenceError("out of range", problem)
+    return lat, lon
+
+
+def _rmc_date(msg: pynmea2.NMEASentence) -> dt.date | None:
+    """The date of an RMC sentence (None if empty); a corrupt time, date or position skips it all."""
+    if msg.timestamp is not None:
+        _checked_time(msg.timestamp)
+    if msg.lat or msg.lon:
+        _checked_position(msg)
+    return None if msg.datestamp is None else _checked_date(msg.datestamp)
+
+
+def _gga_fix(msg: pynmea2.NMEASentence, date: dt.date | None) -> tuple[float, float, float, float]:
+    """Time (Unix s), latitude, longitude (deg) and ellipsoidal height (m) of a GGA sentence."""
+    if msg.timestamp is None or not msg.lat or not msg.lon:
+        raise _UnusableSentenceError("truncated sentence", "empty time or position")
+    stamp = _checked_time(msg.timestamp)
+    if int(msg.gps_qual or 0) == 0:
+        raise _UnusableSentenceError("invalid fix", "GGA quality 0")
+    if date is None:
+        raise _UnusableSentenceError("no date", "GGA before any RMC or ZDA")
+    lat, lon = _checked_position(msg)
+    h = float(msg.altitude) + float(msg.geo_sep or 0.0)
+    if not math.isfinite(h):
+        raise _UnusableSentenceError("NaN or infinite value", "height")
+    if problem := out_of_range("ellipsoidal height", h, HEIGHT_RANGE_M, "m"):
+        raise _UnusableSentenceError("out of range", problem)
+    t = dt.datetime.combine(date, stamp).replace(tzinfo=dt.UTC).timestamp()
+    if problem := time_problem(t):
+        raise _UnusableSentenceError("out of range", problem)
+    return t, lat, lon, h
 
 
 def format_gga(t: dt.datetime, lat_deg: float, lon_deg: float, h_m: float, quality: int = 2) -> str:

@@ -9,6 +9,7 @@ turns raw bytes into numbered text lines, recording lines that are not valid tex
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -31,8 +32,44 @@ REASONS: tuple[str, ...] = (
     "invalid fix",
     "duplicate record",
     "gross outlier",
+    "out of range",
 )
 """Reasons a reader may give; free text is allowed, these are the ones the readers use."""
+
+TIME_RANGE_UNIX_S: tuple[float, float] = (315_964_800.0, 4_102_444_800.0)
+"""Times a log or journal record may carry: 1980-01-06 (the GPS epoch) to 2100-01-01 UTC, Unix seconds."""
+
+LAT_RANGE_DEG: tuple[float, float] = (-90.0, 90.0)
+LON_RANGE_DEG: tuple[float, float] = (-180.0, 180.0)
+"""WGS84 latitude and longitude ranges, degrees (an NMEA longitude is at most 180 degrees E or W)."""
+
+HEIGHT_RANGE_M: tuple[float, float] = (-1_000.0, 10_000.0)
+"""Ellipsoidal heights a GPS antenna on a survey vehicle may have, metres: the geoid lies within about
+-107 to +86 m of the ellipsoid, so anything beyond these bounds is a corrupt field."""
+
+BEACON_ID_RANGE: tuple[int, int] = (0, 2**31 - 1)
+"""Beacon ids a reader or the journal accepts (non-negative 32-bit integers: SQLite and numpy hold them)."""
+
+MAX_RANGE_M: float = 10_000.0
+"""Longest acoustic range a reader or the journal accepts, metres (USBL and LBL systems reach a few km)."""
+
+
+def time_problem(t_unix_s: float) -> str | None:
+    """None if a Unix time is within :data:`TIME_RANGE_UNIX_S`, else a message naming the range."""
+    problem = out_of_range("time", t_unix_s, TIME_RANGE_UNIX_S, "s")
+    return None if problem is None else f"{problem} (Unix time: 1980-01-06 to 2100-01-01 UTC)"
+
+
+def out_of_range(name: str, value: float, bounds: tuple[float, float], unit: str) -> str | None:
+    """None if ``bounds[0] <= value <= bounds[1]`` (and finite), else a message naming the field and range.
+
+    Example: ``out_of_range("latitude", 99.0, LAT_RANGE_DEG, "deg")`` gives
+    ``"latitude 99 deg is outside [-90, 90] deg"``.
+    """
+    lo, hi = bounds
+    if math.isfinite(value) and lo <= value <= hi:
+        return None
+    return f"{name} {value:.12g} {unit} is outside [{lo:.12g}, {hi:.12g}] {unit}"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -6,17 +6,21 @@ Format: a header line naming the columns, then one range per line::
     2018-01-04T18:43:55.120Z,1,9.184
     2018-01-04T18:43:56.610Z,2,2.731
 
-``utc`` is ISO 8601 (a trailing ``Z`` or an offset; no offset means UTC); ``beacon`` an integer id; the
-third column is one of ``range_m`` (metres), ``owtt_s`` (one-way travel time) or ``twtt_s`` (two-way,
+``utc`` is ISO 8601 (a trailing ``Z``, ``UTC`` or an offset such as ``+02:00``, ``+0200`` or ``-08``; no
+offset means UTC); ``beacon`` an integer id in :data:`~oceanloc.io.qc.BEACON_ID_RANGE`; the third
+column is one of ``range_m`` (metres), ``owtt_s`` (one-way travel time) or ``twtt_s`` (two-way,
 turn-around removed), converted with the sound speed given to :func:`read_usbl`. Lines with a
-non-numeric field, a NaN, a negative or absurd range, an unknown beacon id (when the known ids are
-given) or a time earlier than the previous line are skipped and recorded in the QC report.
+non-numeric field, a NaN, a time outside :data:`~oceanloc.io.qc.TIME_RANGE_UNIX_S`, a beacon id out of
+range, a range not in ``(0, max_range_m]``, an unknown beacon id (when the known ids are given), a time
+earlier than the previous line, or the same time and beacon as an earlier line (``duplicate record``:
+the first is used) are skipped and recorded in the QC report.
 """
 
 from __future__ import annotations
 
 import datetime as dt
 import math
+import re
 from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +31,13 @@ from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.geo.enu import EnuOrigin, geodetic_to_enu
 from oceanloc.io.nmea import GpsLog
-from oceanloc.io.qc import QcReport, read_lines
+from oceanloc.io.qc import (
+    BEACON_ID_RANGE,
+    MAX_RANGE_M,
+    QcReport,
+    read_lines,
+    time_problem,
+)
 
 RANGE_COLUMNS: dict[str, float] = {"range_m": 0.0, "owtt_s": 1.0, "twtt_s": 0.5}
 """Accepted measurement columns and the factor applied to ``c * value`` (0: already metres)."""
@@ -59,7 +69,7 @@ def read_usbl(
     *,
     sound_speed_mps: float = 1500.0,
     beacons: Collection[int] | None = None,
-    max_range_m: float = 10_000.0,
+    max_range_m: float = MAX_RANGE_M,
     qc: QcReport | None = None,
 ) -> RangeLog:
     """Read a USBL range CSV (see the module docstring).
@@ -73,11 +83,14 @@ def read_usbl(
     qc = QcReport() if qc is None else qc
     if not 1300.0 <= sound_speed_mps <= 1700.0:
         raise ConfigError(f"sound speed {sound_speed_mps} m/s is outside [1300, 1700]")
+    if not (math.isfinite(max_range_m) and max_range_m > 0.0):
+        raise ConfigError(f"max_range_m {max_range_m} m must be positive and finite")
     known = None if beacons is None else {int(b) for b in beacons}
     columns: list[str] | None = None
     rows: list[tuple[float, int, float]] = []
     lines: list[int] = []
     last_t = -math.inf
+    seen: dict[tuple[float, int], int] = {}  # (time, beacon) -> index in rows
     for number, text in read_lines(p, qc):
         if text.startswith("#"):
             qc.lines_read -= 1
@@ -97,8 +110,8 @@ def read_usbl(
             continue
         try:
             t = _parse_utc(fields[0])
-        except ValueError:
-            qc.add(p, number, "non-numeric field", f"utc {fields[0][:30]!r}")
+        except (ValueError, OverflowError):
+            qc.add(p, number, "non-numeric field", f"utc {fields[0][:40]!r} is not ISO 8601")
             continue
         try:
             beacon = int(fields[1])
@@ -106,13 +119,19 @@ def read_usbl(
         except ValueError:
             qc.add(p, number, "non-numeric field", f"{fields[1][:12]!r}, {fields[2][:20]!r}")
             continue
+        if problem := time_problem(t):
+            qc.add(p, number, "out of range", problem)
+            continue
+        if not BEACON_ID_RANGE[0] <= beacon <= BEACON_ID_RANGE[1]:
+            qc.add(p, number, "out of range", _beacon_problem(fields[1]))
+            continue
         if not math.isfinite(value):
             qc.add(p, number, "NaN or infinite value", columns[2])
             continue
         factor = RANGE_COLUMNS[columns[2]]
         rng = value if factor == 0.0 else factor * sound_speed_mps * value
         if not 0.0 < rng <= max_range_m:
-            qc.add(p, number, "negative or absurd range", f"{rng:.3f} m")
+            qc.add(p, number, "negative or absurd range", f"{rng:.6g} m is not in (0, {max_range_m:g}] m")
             continue
         if known is not None and beacon not in known:
             qc.add(p, number, "unknown beacon id", str(beacon))
@@ -120,6 +139,16 @@ def read_usbl(
         if t < last_t:
             qc.add(p, number, "time going backwards", f"{t - last_t:+.3f} s")
             continue
+        if (first := seen.get((t, beacon))) is not None:
+            same = "the same range" if rows[first][2] == rng else f"another range ({rows[first][2]:g} m)"
+            qc.add(
+                p,
+                number,
+                "duplicate record",
+                f"beacon {beacon} at this time has {same} on line {lines[first]}",
+            )
+            continue
+        seen[(t, beacon)] = len(rows)
         last_t = t
         rows.append((t, beacon, rng))
         lines.append(number)
@@ -136,11 +165,29 @@ def read_usbl(
     )
 
 
+_ISO_UTC_RE = re.compile(
+    r"(?P<date>\d{4}-\d{2}-\d{2}|\d{8})[Tt ](?P<time>\d{2}(?::?\d{2}(?::?\d{2}(?:[.,]\d+)?)?)?)"
+    r"\s*(?P<tz>[Zz]|UTC|GMT|[+-]\d{2}(?::?\d{2})?)?"
+)
+
+
 def _parse_utc(text: str) -> float:
-    stamp = dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
+    """ISO 8601 date and time to Unix seconds; ``Z``, ``UTC``, ``GMT`` or an offset (``+02``, ``+0200``,
+    ``+02:00``, with or without a space before it); no zone means UTC. ValueError if not ISO 8601."""
+    match = _ISO_UTC_RE.fullmatch(text.strip())
+    if match:
+        tz = match["tz"] or ""
+        tz = "+00:00" if tz.upper() in ("Z", "UTC", "GMT") else tz
+        text = f"{match['date']}T{match['time']}{tz}"
+    stamp = dt.datetime.fromisoformat(text)
     if stamp.tzinfo is None:
         stamp = stamp.replace(tzinfo=dt.UTC)
     return stamp.timestamp()
+
+
+def _beacon_problem(text: str) -> str:
+    shown = text if len(text) <= 24 else f"{text[:10]}...{text[-6:]} ({len(text)} digits)"
+    return f"beacon id {shown} is outside [{BEACON_ID_RANGE[0]}, {BEACON_ID_RANGE[1]}]"
 
 
 def format_utc(t_unix_s: float) -> str:

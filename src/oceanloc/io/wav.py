@@ -3,8 +3,10 @@
 8-bit unsigned, 16-, 24- and 32-bit signed integer PCM and 32- or 64-bit IEEE float, mono or multi-channel
 (including WAVE_FORMAT_EXTENSIBLE headers), through :func:`scipy.io.wavfile.read`. Samples are returned as
 floats scaled to ``[-1, 1)`` (full scale of the integer format; float files as stored), so recordings of
-different formats can be correlated directly. Unreadable files and recordings that cannot be compared
-(different sample rates) raise :class:`oceanloc.errors.DataError` naming the files.
+different formats can be correlated directly. Unreadable files, truncated files (the data ends before
+the size the header announces, or inside a sample frame, or the header itself is cut) and recordings that
+cannot be compared (different sample rates) raise :class:`oceanloc.errors.DataError` naming the files:
+a truncated recording is never returned as if it were complete.
 
 :func:`write_wav` writes 16-bit PCM; :func:`example_recordings` gives the paths of the sample pair shipped
 in ``oceanloc/data/tdoa_sweep`` (made by :func:`oceanloc.sim.flock.write_example_recordings`).
@@ -12,6 +14,8 @@ in ``oceanloc/data/tdoa_sweep`` (made by :func:`oceanloc.sim.flock.write_example
 
 from __future__ import annotations
 
+import re
+import struct
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,18 +68,42 @@ class Recording:
 
 
 def read_wav(path: str | Path) -> Recording:
-    """Read a WAV file into a :class:`Recording` of floats in ``[-1, 1)``."""
+    """Read a WAV file into a :class:`Recording` of floats in ``[-1, 1)``.
+
+    Raises
+    ------
+    DataError
+        If the file is missing, not a WAV file, truncated, empty, or holds non-finite samples.
+    """
     p = Path(path)
     try:
-        with warnings.catch_warnings():
+        size = p.stat().st_size
+        with warnings.catch_warnings(record=True) as caught:
             import scipy.io.wavfile
 
-            warnings.simplefilter("ignore", scipy.io.wavfile.WavFileWarning)
+            warnings.simplefilter("always", scipy.io.wavfile.WavFileWarning)
             rate, data = scipy.io.wavfile.read(p)
     except FileNotFoundError:
         raise DataError(f"{p}: file not found") from None
+    except struct.error:
+        raise DataError(f"{p}: truncated WAV file: the header ends after {size} bytes") from None
     except Exception as exc:  # scipy raises assorted types (ValueError, UnboundLocalError) on bad headers
+        text = str(exc)
+        if "Unexpected end of file" in text:
+            raise DataError(f"{p}: truncated WAV file: the header ends after {size} bytes") from None
+        if "multiple of element size" in text:
+            raise DataError(
+                f"{p}: truncated WAV file: the data ends inside a sample frame ({size} bytes)"
+            ) from None
         raise DataError(f"{p}: not a readable WAV file ({exc})") from None
+    for w in caught:
+        if "Reached EOF prematurely" in str(w.message):
+            expected = re.search(r"expected (\d+) bytes", str(w.message))
+            announced = f", the header announces {expected[1]}" if expected else ""
+            raise DataError(
+                f"{p}: truncated WAV file: {size} bytes{announced} ({data.shape[0]} sample frames present); "
+                "the recording was cut off"
+            )
     if data.shape[0] == 0:
         raise DataError(f"{p}: holds no samples")
     if rate <= 0:
