@@ -293,6 +293,8 @@ class BoatSimulator:
         Seed of the position noise.
     ignore_items_once : frozenset of int
         Mission item sequence numbers whose first arrival is dropped (tests the sender's retries).
+    request_retry_s : float
+        During an upload, re-request the expected item after this many wall-clock seconds without it.
     sysid : int
         MAVLink system id (the component is ``MAV_COMP_ID_AUTOPILOT1``).
     """
@@ -311,6 +313,7 @@ class BoatSimulator:
         gps_noise_m: float = 0.0,
         seed: int = 0,
         ignore_items_once: frozenset[int] = frozenset(),
+        request_retry_s: float = _UPLOAD_RETRY_S,
         sysid: int = 1,
     ) -> None:
         _check_loopback(endpoint)
@@ -332,6 +335,7 @@ class BoatSimulator:
         self._mission_seq = 0
         self._upload: _Upload | None = None
         self._ignore_once = set(ignore_items_once)
+        self._request_retry_s = float(request_retry_s)
         self._rng = np.random.default_rng(seed)
         self._gps_noise_m = float(gps_noise_m)
         self._rates_hz = dict(_DEFAULT_RATES_HZ)
@@ -351,7 +355,7 @@ class BoatSimulator:
         self.error: BaseException | None = None
         """The exception that ended the thread, if one did."""
 
-    # -- life cycle -------------------------------------------------------------------------------------
+    # -- life cycle -------------------------------------------------------------------------------
 
     def start(self) -> BoatSimulator:
         """Open the endpoint and start the thread; returns self."""
@@ -395,7 +399,7 @@ class BoatSimulator:
         else:
             self._link_cut.clear()
 
-    # -- what other simulators and tests read -------------------------------------------------------------
+    # -- what other simulators and tests read -----------------------------------------------------
 
     def truth(self) -> BoatTruth:
         """The true state now (thread-safe)."""
@@ -434,7 +438,7 @@ class BoatSimulator:
             mission_seq=seq,
         )
 
-    # -- the thread ---------------------------------------------------------------------------------------
+    # -- the thread -------------------------------------------------------------------------------
 
     def _run(self) -> None:
         wall0 = time.monotonic()
@@ -461,7 +465,7 @@ class BoatSimulator:
                 if dist <= self.params.wp_radius_m:
                     self._advance_mission_locked()
 
-    # -- sending ------------------------------------------------------------------------------------------
+    # -- sending ----------------------------------------------------------------------------------
 
     def _time_boot_ms(self) -> int:
         return int(self._state.t_s * 1000.0) & 0xFFFFFFFF
@@ -499,8 +503,12 @@ class BoatSimulator:
                 mavlink.MAV_TYPE_SURFACE_BOAT, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, base, mode, status
             )
             return
-        truth = self._truth_of(s, mode, armed, seq)
-        ve, vn = truth.vel_enu_mps
+        ce, cn = self.params.current_enu_mps
+        ve = s.speed_mps * math.sin(s.heading_rad) + ce
+        vn = s.speed_mps * math.cos(s.heading_rad) + cn
+        heading_deg = math.degrees(s.heading_rad)
+        if name in ("GLOBAL_POSITION_INT", "SIM_STATE"):
+            truth = self._truth_of(s, mode, armed, seq)
         if name == "GLOBAL_POSITION_INT":
             lat, lon = truth.lat_deg, truth.lon_deg
             if self._gps_noise_m > 0.0:
@@ -516,7 +524,7 @@ class BoatSimulator:
                 round(vn * 100.0),
                 round(ve * 100.0),
                 0,
-                round(truth.heading_deg * 100.0) % 36000,
+                round(heading_deg * 100.0) % 36000,
             )
         elif name == "ATTITUDE":
             mav.attitude_send(
@@ -524,7 +532,7 @@ class BoatSimulator:
             )
         elif name == "VFR_HUD":
             mav.vfr_hud_send(
-                s.speed_mps, math.hypot(ve, vn), round(truth.heading_deg) % 360,
+                s.speed_mps, math.hypot(ve, vn), round(heading_deg) % 360,
                 round(100.0 * s.speed_mps / (1.5 * self.params.cruise_speed_mps)), 0.0, 0.0,
             )  # fmt: skip
         elif name == "SYS_STATUS":
@@ -567,7 +575,7 @@ class BoatSimulator:
         if not self._link_cut.is_set() and self._conn is not None:
             self._conn.mav.statustext_send(severity, text.encode()[:50])
 
-    # -- receiving ----------------------------------------------------------------------------------------
+    # -- receiving --------------------------------------------------------------------------------
 
     def _receive_all(self) -> None:
         conn = self._conn
@@ -708,7 +716,7 @@ class BoatSimulator:
 
     def _retry_upload(self) -> None:
         up = self._upload
-        if up is None or time.monotonic() - up.last_request_wall < _UPLOAD_RETRY_S:
+        if up is None or time.monotonic() - up.last_request_wall < self._request_retry_s:
             return
         if up.retries >= _UPLOAD_RETRIES:
             self._upload = None
