@@ -137,8 +137,8 @@ def test_dialect_heartbeat_mode_change_and_arming_refusal_with_raw_pymavlink():
 def test_truth_reports_the_start_and_the_simulated_clock_runs_at_the_time_scale():
     port = free_udp_port()
     sim = BoatSimulator(f"udpout:127.0.0.1:{port}", start_lat_deg=10.0, start_lon_deg=20.0, time_scale=20.0)
+    t0 = time.monotonic()
     with sim:
-        t0 = time.monotonic()
         time.sleep(0.5)
         truth = sim.truth()
         wall = time.monotonic() - t0

@@ -10,7 +10,8 @@ set; it is written from those descriptions with pymavlink, not from ArduPilot's 
   ``MAV_CMD_COMPONENT_ARM_DISARM`` with ``MAV_RESULT_DENIED`` (and records that it came).
 - Mode changes by ``COMMAND_LONG``/``COMMAND_INT`` ``MAV_CMD_DO_SET_MODE`` (param2 = custom mode) or the
   ``SET_MODE`` message, each answered by ``COMMAND_ACK`` (for ``SET_MODE`` with ``command = 11``, the
-  message id, as ArduPilot does). Entering AUTO without a mission fails (``MAV_RESULT_FAILED``).
+  message id, as ArduPilot does). Entering AUTO without a mission fails (``MAV_RESULT_FAILED`` and the
+  notice "No Mission. Can't set AUTO."); ``MAV_CMD_MISSION_START`` enters AUTO (at item param1 if given).
 - GUIDED: ``SET_POSITION_TARGET_GLOBAL_INT`` (frames ``GLOBAL_INT``, ``GLOBAL_RELATIVE_ALT_INT``,
   ``GLOBAL_TERRAIN_ALT_INT``; position bits of ``type_mask`` not ignored) and ``MISSION_ITEM_INT`` with
   ``current = 2`` set the destination; ignored in other modes, as documented. The accepted target is
@@ -336,6 +337,7 @@ class BoatSimulator:
         self._upload: _Upload | None = None
         self._ignore_once = set(ignore_items_once)
         self._request_retry_s = float(request_retry_s)
+        self._pending_text = ""
         self._rng = np.random.default_rng(seed)
         self._gps_noise_m = float(gps_noise_m)
         self._rates_hz = dict(_DEFAULT_RATES_HZ)
@@ -608,6 +610,11 @@ class BoatSimulator:
         self.commands.append(int(command))
         if command == mavlink.MAV_CMD_DO_SET_MODE:
             self._ack(command, self._set_mode(int(p[1])), msg)
+        elif command == mavlink.MAV_CMD_MISSION_START:
+            with self._lock:
+                if 0 < int(p[0]) < len(self._mission):
+                    self._mission_seq = int(p[0])
+            self._ack(command, self._set_mode(MODE_AUTO), msg)
         elif command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
             self._statustext("Arming is the operator's: command refused", mavlink.MAV_SEVERITY_WARNING)
             self._ack(command, mavlink.MAV_RESULT_DENIED, msg)
@@ -659,11 +666,19 @@ class BoatSimulator:
         self._ack(mavlink.MAVLINK_MSG_ID_SET_MODE, result, msg)
 
     def _set_mode(self, mode: int) -> int:
+        result = self._set_mode_locked(mode)
+        if self._pending_text:
+            self._statustext(self._pending_text, mavlink.MAV_SEVERITY_NOTICE)
+            self._pending_text = ""
+        return result
+
+    def _set_mode_locked(self, mode: int) -> int:
         with self._lock:
             if mode not in ROVER_MODES:
                 return mavlink.MAV_RESULT_FAILED
             if mode == MODE_AUTO:
                 if len(self._mission) < 2:
+                    self._pending_text = "No Mission. Can't set AUTO."
                     return mavlink.MAV_RESULT_FAILED
                 if self._mission_seq < 1 or self._mission_seq >= len(self._mission):
                     self._mission_seq = 1
