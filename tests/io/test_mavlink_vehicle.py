@@ -7,10 +7,15 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
+import pty
 import socket
+import threading
 import time
+import tty
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as dialect
 
 from oceanloc.errors import ConfigError
 from oceanloc.io.mavlink_vehicle import (
@@ -311,3 +316,49 @@ def test_no_heartbeat_gives_a_timeout_result():
         vehicle.close()
     assert result.status == "timeout"
     assert result.message.endswith("no heartbeat within 0.3 s")
+
+
+def test_serial_spec_talks_mavlink_over_a_pseudo_terminal():
+    """A serial link (pyserial under pymavlink) on a pty: the far end plays the autopilot by hand."""
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    name = os.ttyname(slave)
+
+    class PtyWriter:
+        def write(self, data: bytes) -> None:
+            os.write(master, data)
+
+    autopilot = dialect.MAVLink(PtyWriter(), srcSystem=7, srcComponent=1)
+    vehicle = MavlinkVehicle(f"serial://{name}?baud=57600")
+    try:
+        result_box = []
+        t = threading.Thread(target=lambda: result_box.append(vehicle.connect(wait_heartbeat_s=3.0)))
+        t.start()
+        for _ in range(20):
+            autopilot.heartbeat_send(
+                mavlink.MAV_TYPE_SURFACE_BOAT,
+                mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                ROVER_MODES["GUIDED"],
+                mavlink.MAV_STATE_STANDBY,
+            )
+            time.sleep(0.05)
+            if result_box:
+                break
+        t.join(4.0)
+        assert result_box[0].status == "connected"
+        st = vehicle.link()
+        assert (st.mode_name, st.armed) == ("GUIDED", False)
+        # our ground-station heartbeat reaches the autopilot side of the line
+        parser = dialect.MAVLink(None)
+        parser.robust_parsing = True
+        seen = set()
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline and "HEARTBEAT" not in seen:
+            for msg in parser.parse_buffer(os.read(master, 4096)) or []:
+                seen.add(msg.get_type())
+        assert "HEARTBEAT" in seen
+    finally:
+        vehicle.close()
+        os.close(master)
+        os.close(slave)
