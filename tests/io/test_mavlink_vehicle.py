@@ -245,7 +245,7 @@ def test_mission_upload_then_auto_visits_every_item(boat_and_vehicle):
     assert vehicle.start_mission().status == "accepted"
     assert sim.mode == MODE_AUTO
     # 3 legs of 30 m at 5 m/s: 18 s plus turns; the mission ends in HOLD (MIS_DONE_BEHAVE 0)
-    assert wait_until(lambda: sim.mode == MODE_HOLD, 4.0)
+    assert wait_until(lambda: sim.mode == MODE_HOLD, 8.0)
     assert sim.reached == [1, 2, 3]
     assert wait_until(lambda: vehicle.reached == [1, 2, 3], 1.0)
     assert distance_m(sim.truth(), *waypoints[-1]) < BoatParams().wp_radius_m + 1.0  # coasting to a stop
@@ -270,8 +270,9 @@ def test_link_loss_is_detected_within_the_timeout_when_the_boat_goes_silent(boat
     sim.stop()
     t0 = time.monotonic()
     assert wait_until(lambda: not vehicle.link().alive, 3.0)
-    # silence began at most one heartbeat interval (0.1 s wall at 10x) before the stop
-    assert time.monotonic() - t0 < vehicle.heartbeat_timeout_s + 0.3
+    # silence began at most one heartbeat interval (0.1 s wall at 10x) before the stop; 0.5 s of slack for
+    # a loaded machine (2 cores shared)
+    assert time.monotonic() - t0 < vehicle.heartbeat_timeout_s + 0.5
     result = vehicle.set_mode("HOLD")
     assert result.status == "link_lost"
 
@@ -362,3 +363,16 @@ def test_serial_spec_talks_mavlink_over_a_pseudo_terminal():
         vehicle.close()
         os.close(master)
         os.close(slave)
+
+
+@pytest.mark.parametrize(
+    "boat_and_vehicle", [{"rates_hz": {"POSITION_TARGET_GLOBAL_INT": 0.0}}], indirect=True
+)
+def test_goto_without_the_target_echo_is_unconfirmed_but_sent(boat_and_vehicle):
+    sim, vehicle = boat_and_vehicle
+    lat, lon = offset(20.0, 0.0)
+    result = vehicle.goto(lat, lon)
+    assert result.status == "unconfirmed"
+    assert result.message == f"goto {lat:.7f}, {lon:.7f} sent; the vehicle did not echo the target"
+    assert vehicle.sent.count("SET_POSITION_TARGET_GLOBAL_INT") == vehicle.command_retries + 1
+    assert wait_until(lambda: distance_m(sim.truth(), lat, lon) < BoatParams().wp_radius_m, 4.0)

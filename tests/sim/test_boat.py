@@ -147,3 +147,38 @@ def test_truth_reports_the_start_and_the_simulated_clock_runs_at_the_time_scale(
     # never ahead of the time scale; behind it only as far as a loaded machine makes it (2 shared cores)
     assert 0.3 * 20.0 * wall < truth.t_s <= 20.0 * wall
     assert truth.to_record()["mode"] == "HOLD"
+
+
+def test_unknown_telemetry_rate_is_refused():
+    with pytest.raises(ConfigError, match="no telemetry rate for GPS_RAW_INT: one of HEARTBEAT"):
+        BoatSimulator("udpout:127.0.0.1:14550", rates_hz={"GPS_RAW_INT": 1.0})
+
+
+def test_guided_goto_as_a_mission_item_with_current_2_only_in_guided():
+    port = free_udp_port()
+    gcs = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=255, dialect="ardupilotmega")
+    sim = BoatSimulator(f"udpout:127.0.0.1:{port}", time_scale=10.0).start()
+    lat, lon = 32.70 + 30.0 / 110_900.0, -117.25
+
+    def goto_item():
+        gcs.mav.mission_item_int_send(
+            1, 1, 0, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, mavlink.MAV_CMD_NAV_WAYPOINT, 2, 1,
+            0, 0, 0, 0, round(lat * 1e7), round(lon * 1e7), 0, 0,
+        )  # fmt: skip
+        return gcs.recv_match(type="MISSION_ACK", blocking=True, timeout=3.0)
+
+    try:
+        assert gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=3.0) is not None
+        assert goto_item().type == mavlink.MAV_MISSION_ERROR  # in HOLD
+        gcs.mav.command_long_send(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, MODE_GUIDED, 0, 0, 0, 0, 0)
+        assert gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=3.0).result == 0
+        assert goto_item().type == mavlink.MAV_MISSION_ACCEPTED
+        deadline = time.monotonic() + 3.0
+        while (
+            math.hypot(sim.truth().east_m, sim.truth().north_m - 30.0) > 3.0 and time.monotonic() < deadline
+        ):
+            time.sleep(0.02)
+        assert math.hypot(sim.truth().east_m, sim.truth().north_m - 30.0) <= 3.0
+    finally:
+        sim.stop()
+        gcs.close()

@@ -96,7 +96,7 @@ def test_mavsdk_uploads_downloads_and_starts_a_mission_on_the_boat(mavsdk_gcs_an
     assert sim.mode == MODE_AUTO
     assert wait_until(lambda: telemetry.flight_mode() == FlightMode.MISSION, 2.0)
     # two 22 m legs at 5 m/s: the mission ends (HOLD) after about 10 simulated seconds
-    assert wait_until(lambda: sim.mode == MODE_HOLD, 4.0)
+    assert wait_until(lambda: sim.mode == MODE_HOLD, 6.0)
     assert sim.reached == [1, 2]
 
 

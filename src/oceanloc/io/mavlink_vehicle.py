@@ -31,7 +31,6 @@ sends ``MAV_CMD_COMPONENT_ARM_DISARM``.
 from __future__ import annotations
 
 import math
-import os
 import queue
 import threading
 import time
@@ -42,14 +41,8 @@ from typing import Literal
 from urllib.parse import parse_qs, urlsplit
 
 from oceanloc.errors import ConfigError
+from oceanloc.io._mavlink import mavlink, mavutil
 from oceanloc.io.qc import QcReport
-
-# pymavlink picks MAVLink 1 or 2 from this variable when the dialect is loaded; ArduPilot speaks MAVLink 2.
-os.environ.setdefault("MAVLINK20", "1")
-from pymavlink import mavutil
-
-mavutil.set_dialect("ardupilotmega")
-mavlink = mavutil.mavlink
 
 ROVER_MODES: dict[str, int] = {"MANUAL": 0, "HOLD": 4, "LOITER": 5, "AUTO": 10, "GUIDED": 15}
 """ArduPilot Rover custom modes (``HEARTBEAT.custom_mode``) this adapter uses, name -> number."""

@@ -43,25 +43,18 @@ cleanly. :meth:`BoatSimulator.truth` gives its true position to other simulators
 from __future__ import annotations
 
 import math
-import os
 import threading
 import time
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
+from oceanloc.io._mavlink import mavlink, mavutil
 from oceanloc.units import GRAVITY_MPS2
-
-# pymavlink picks MAVLink 1 or 2 from this variable when the dialect is loaded; MAVSDK and ArduPilot
-# speak MAVLink 2, so it is set (if unset) before pymavlink is imported.
-os.environ.setdefault("MAVLINK20", "1")
-from pymavlink import mavutil
-
-mavutil.set_dialect("ardupilotmega")
-mavlink = mavutil.mavlink
 
 MODE_MANUAL = 0
 MODE_HOLD = 4
@@ -296,6 +289,8 @@ class BoatSimulator:
         Mission item sequence numbers whose first arrival is dropped (tests the sender's retries).
     request_retry_s : float
         During an upload, re-request the expected item after this many wall-clock seconds without it.
+    rates_hz : mapping of str to float, optional
+        Telemetry rates to change from the defaults, by message name (0 stops a message).
     sysid : int
         MAVLink system id (the component is ``MAV_COMP_ID_AUTOPILOT1``).
     """
@@ -315,6 +310,7 @@ class BoatSimulator:
         seed: int = 0,
         ignore_items_once: frozenset[int] = frozenset(),
         request_retry_s: float = _UPLOAD_RETRY_S,
+        rates_hz: Mapping[str, float] | None = None,
         sysid: int = 1,
     ) -> None:
         _check_loopback(endpoint)
@@ -340,7 +336,10 @@ class BoatSimulator:
         self._pending_text = ""
         self._rng = np.random.default_rng(seed)
         self._gps_noise_m = float(gps_noise_m)
-        self._rates_hz = dict(_DEFAULT_RATES_HZ)
+        unknown = sorted(set(rates_hz or {}) - set(_DEFAULT_RATES_HZ))
+        if unknown:
+            raise ConfigError(f"no telemetry rate for {unknown[0]}: one of {', '.join(_DEFAULT_RATES_HZ)}")
+        self._rates_hz = {**_DEFAULT_RATES_HZ, **(rates_hz or {})}
         self._next_send_s: dict[str, float] = dict.fromkeys(self._rates_hz, 0.0)
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -746,9 +745,10 @@ class BoatSimulator:
     def _on_mission_item_int(self, msg) -> None:
         if msg.current == 2:  # a guided-mode "go to" in the form of a mission item
             with self._lock:
-                if self._mode == MODE_GUIDED and msg.frame in _GLOBAL_FRAMES:
+                accepted = self._mode == MODE_GUIDED and msg.frame in _GLOBAL_FRAMES
+                if accepted:
                     self._target = self._local(msg.x * 1e-7, msg.y * 1e-7)
-            self._mission_ack(msg, mavlink.MAV_MISSION_ACCEPTED)
+            self._mission_ack(msg, mavlink.MAV_MISSION_ACCEPTED if accepted else mavlink.MAV_MISSION_ERROR)
             return
         up = self._upload
         if up is None:
