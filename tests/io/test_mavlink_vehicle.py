@@ -14,6 +14,7 @@ import threading
 import time
 import tty
 
+import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as dialect
 
@@ -130,7 +131,7 @@ def test_position_qc_skips_no_fix_duplicates_and_jumps_and_names_each():
     assert check(position(1000, LAT0, LON0, alt_mm=1500)) == pytest.approx((LAT0, LON0, 1.5))
     assert check(position(1000, LAT0, LON0)) is None  # same time again
     assert check(position(2000, LAT0 + 0.01, LON0)) is None  # 1.1 km in 1 s
-    assert check(position(3000, LAT0 + 1e-5, LON0)) is not None  # 1.1 m in 2 s
+    assert check(position(2200, LAT0 + 8e-5, LON0)) is not None  # 8.9 m in 0.2 s: within 5 m + 10 m of noise
     assert check(position(500, LAT0, LON0)) is not None  # a reboot: kept, noted
     assert qc.counts() == {
         "invalid fix": 1,
@@ -141,6 +142,16 @@ def test_position_qc_skips_no_fix_duplicates_and_jumps_and_names_each():
     assert qc.lines_read == 6
     assert qc.records_kept == 3
     assert [i.line for i in qc.issues] == [1, 3, 4, 6]
+
+
+def test_position_qc_takes_a_new_reference_after_five_outliers_in_a_row():
+    qc = QcReport()
+    check = _FixQc("udp://test", qc, max_speed_mps=25.0).check
+    assert check(position(0, LAT0, LON0)) is not None
+    moved = [check(position(200 * k, LAT0 + 0.01, LON0)) for k in range(1, 7)]  # a 1.1 km step, then steady
+    assert [m is not None for m in moved] == [False, False, False, False, True, True]
+    assert qc.counts() == {"gross outlier": 5}
+    assert qc.issues[-1].detail == "5 in a row: new reference; kept"
 
 
 # -- against the boat simulator ------------------------------------------------------------------
@@ -376,3 +387,21 @@ def test_goto_without_the_target_echo_is_unconfirmed_but_sent(boat_and_vehicle):
     assert result.message == f"goto {lat:.7f}, {lon:.7f} sent; the vehicle did not echo the target"
     assert vehicle.sent.count("SET_POSITION_TARGET_GLOBAL_INT") == vehicle.command_retries + 1
     assert wait_until(lambda: distance_m(sim.truth(), lat, lon) < BoatParams().wp_radius_m, 4.0)
+
+
+@pytest.mark.parametrize("boat_and_vehicle", [{"gps_noise_m": 2.0, "seed": 7}], indirect=True)
+def test_noisy_fixes_pass_qc_and_scatter_as_the_noise(boat_and_vehicle):
+    sim, vehicle = boat_and_vehicle
+    fixes, t_end = [], time.monotonic() + 2.0
+    for fix in vehicle.fixes(timeout_s=0.5):
+        fixes.append(fix)
+        if len(fixes) >= 200 or time.monotonic() > t_end:
+            break
+    n = len(fixes)
+    assert n >= 60
+    north = np.array([(f.lat_deg - LAT0) * M_PER_DEG_LAT for f in fixes])
+    # std of n normal draws: standard error sigma / sqrt(2 n) <= 0.18 m at n >= 60; 4 standard errors
+    assert north.std(ddof=1) == pytest.approx(2.0, abs=4 * 2.0 / math.sqrt(2 * n))
+    assert abs(north.mean()) < 4 * 2.0 / math.sqrt(n)  # the truth does not move: HOLD, no current
+    assert sim.truth().north_m == 0.0
+    assert vehicle.qc.counts().get("gross outlier", 0) == 0

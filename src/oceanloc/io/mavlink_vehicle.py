@@ -52,7 +52,7 @@ USE_POSITION_TYPE_MASK = 0x0DFC
 """``type_mask`` of a position-only SET_POSITION_TARGET_* (ArduPilot's "Use Position", 3580)."""
 
 MAX_SPEED_MPS = 25.0
-"""Fixes implying a faster move from the previous fix are gross outliers (a boat is far slower)."""
+"""Fixes implying a faster move from the previous fix (beyond 10 m of noise) are gross outliers."""
 
 Status = Literal["accepted", "rejected", "timeout", "link_lost", "not_in_mode", "unconfirmed", "connected"]
 
@@ -238,12 +238,27 @@ def _result_name(enum: str, code: int) -> str:
 
 
 class _FixQc:
-    """Line-level QC of GLOBAL_POSITION_INT, as the file readers do it (reasons of io.qc.REASONS)."""
+    """Line-level QC of GLOBAL_POSITION_INT, as the file readers do it (reasons of io.qc.REASONS).
 
-    def __init__(self, source: str, qc: QcReport, max_speed_mps: float) -> None:
+    A fix is a gross outlier when it lies farther from the last kept fix than ``max_speed * dt`` plus
+    ``jump_allowance_m`` (the GNSS noise of two fixes, so that noisy fixes at 5 Hz are not thrown out).
+    After ``reset_after`` outliers in a row the position really moved (a GNSS re-acquisition): the fix is
+    kept, noted, and becomes the new reference.
+    """
+
+    def __init__(
+        self,
+        source: str,
+        qc: QcReport,
+        max_speed_mps: float,
+        jump_allowance_m: float = 10.0,
+        reset_after: int = 5,
+    ) -> None:
         self.source, self.qc, self.max_speed_mps = source, qc, max_speed_mps
+        self.jump_allowance_m, self.reset_after = jump_allowance_m, reset_after
         self.last: tuple[int, float, float] | None = None  # time_boot_ms, lat, lon
         self.number = 0
+        self.outliers_in_a_row = 0
 
     def check(self, msg) -> tuple[float, float, float] | None:
         self.number += 1
@@ -264,9 +279,18 @@ class _FixQc:
             else:
                 north = math.radians(lat - lat0) * 6_371_000.0
                 east = math.radians(lon - lon0) * 6_371_000.0 * math.cos(math.radians(lat0))
-                speed = math.hypot(north, east) / dt_s
-                if speed > self.max_speed_mps:
-                    return self._skip("gross outlier", f"implies {speed:.0f} m/s")
+                jump = math.hypot(north, east)
+                if jump > self.max_speed_mps * dt_s + self.jump_allowance_m:
+                    self.outliers_in_a_row += 1
+                    if self.outliers_in_a_row < self.reset_after:
+                        return self._skip("gross outlier", f"{jump:.0f} m in {dt_s:.1f} s")
+                    self.qc.add(
+                        self.source,
+                        self.number,
+                        "gross outlier",
+                        f"{self.reset_after} in a row: new reference; kept",
+                    )
+        self.outliers_in_a_row = 0
         self.last = (msg.time_boot_ms, lat, lon)
         self.qc.records_kept += 1
         return lat, lon, h

@@ -346,7 +346,6 @@ class BoatSimulator:
         self._link_cut = threading.Event()
         self._thread: threading.Thread | None = None
         self._conn = None
-        self._boot_wall = time.monotonic()
         self.received: Counter[str] = Counter()
         """Number of messages received, by MAVLink message name."""
         self.commands: list[int] = []
@@ -368,7 +367,6 @@ class BoatSimulator:
             source_component=mavlink.MAV_COMP_ID_AUTOPILOT1,
             dialect="ardupilotmega",
         )
-        self._boot_wall = time.monotonic()
         self._thread = threading.Thread(target=self._run, name="boat-simulator", daemon=True)
         self._thread.start()
         return self
