@@ -315,6 +315,9 @@ class MavlinkVehicle:
         Resends after the first try.
     max_speed_mps : float
         QC: a fix implying a faster move is a gross outlier.
+    gcs_heartbeat_hz : float
+        Rate of our ground-station heartbeat (1 Hz; faster against a simulator run faster than real time,
+        whose GCS failsafe counts simulated seconds).
     source_system, source_component : int
         Our MAVLink ids (a ground station: 255, ``MAV_COMP_ID_MISSIONPLANNER``).
     clock : callable
@@ -329,6 +332,7 @@ class MavlinkVehicle:
         command_timeout_s: float = 1.0,
         command_retries: int = 2,
         max_speed_mps: float = MAX_SPEED_MPS,
+        gcs_heartbeat_hz: float = 1.0,
         source_system: int = 255,
         source_component: int = mavlink.MAV_COMP_ID_MISSIONPLANNER,
         clock: Callable[[], float] = time.monotonic,
@@ -345,6 +349,9 @@ class MavlinkVehicle:
         self.heartbeat_timeout_s = float(heartbeat_timeout_s)
         self.command_timeout_s = float(command_timeout_s)
         self.command_retries = int(command_retries)
+        if not (math.isfinite(gcs_heartbeat_hz) and gcs_heartbeat_hz > 0.0):
+            raise ConfigError(f"gcs_heartbeat_hz must be a positive number, got {gcs_heartbeat_hz}")
+        self._gcs_heartbeat_s = 1.0 / float(gcs_heartbeat_hz)
         self._source = (int(source_system), int(source_component))
         self._clock = clock
         self.qc = QcReport()
@@ -724,7 +731,7 @@ class MavlinkVehicle:
         while not self._stop.is_set():
             now = self._clock()
             if now >= next_hb:
-                next_hb = now + 1.0
+                next_hb = now + self._gcs_heartbeat_s
                 try:
                     with self._send_lock:
                         self._conn.mav.heartbeat_send(

@@ -291,6 +291,13 @@ class BoatSimulator:
         During an upload, re-request the expected item after this many wall-clock seconds without it.
     rates_hz : mapping of str to float, optional
         Telemetry rates to change from the defaults, by message name (0 stops a message).
+    fs_gcs_enable : bool
+        The GCS failsafe [FS_GCS_ENABLE, off by default]: once a ground station's heartbeat has been heard,
+        none for ``fs_timeout_s`` of simulated time while in GUIDED, AUTO or LOITER switches to HOLD
+        [FS_ACTION 2] with a warning. Heartbeats come at wall-clock rates: at a time scale k the ground
+        station's interval counts k times over, so ``fs_timeout_s`` must exceed k / its heartbeat rate.
+    fs_timeout_s : float
+        [FS_TIMEOUT], simulated seconds (1.5 in the Rover parameter list).
     sysid : int
         MAVLink system id (the component is ``MAV_COMP_ID_AUTOPILOT1``).
     """
@@ -311,6 +318,8 @@ class BoatSimulator:
         ignore_items_once: frozenset[int] = frozenset(),
         request_retry_s: float = _UPLOAD_RETRY_S,
         rates_hz: Mapping[str, float] | None = None,
+        fs_gcs_enable: bool = False,
+        fs_timeout_s: float = 1.5,
         sysid: int = 1,
     ) -> None:
         _check_loopback(endpoint)
@@ -334,6 +343,12 @@ class BoatSimulator:
         self._ignore_once = set(ignore_items_once)
         self._request_retry_s = float(request_retry_s)
         self._pending_text = ""
+        self._fs_gcs_enable = bool(fs_gcs_enable)
+        self._fs_timeout_s = float(fs_timeout_s)
+        self._last_gcs_heartbeat_s: float | None = None
+        self._failsafe_active = False
+        self.failsafes = 0
+        """Number of GCS failsafes triggered."""
         self._rng = np.random.default_rng(seed)
         self._gps_noise_m = float(gps_noise_m)
         unknown = sorted(set(rates_hz or {}) - set(_DEFAULT_RATES_HZ))
@@ -454,6 +469,7 @@ class BoatSimulator:
             self.error = exc
 
     def _step(self) -> None:
+        self._check_gcs_failsafe()
         with self._lock:
             armed, mode = self._armed, self._mode
             target = self._target if armed and mode in (MODE_GUIDED, MODE_AUTO, MODE_LOITER) else None
@@ -654,6 +670,25 @@ class BoatSimulator:
         self._conn.mav.autopilot_version_send(
             caps, 4 << 24 | 6 << 16, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, self.sysid
         )
+
+    def _on_heartbeat(self, msg) -> None:
+        if msg.type == mavlink.MAV_TYPE_GCS:
+            self._last_gcs_heartbeat_s = self._state.t_s
+            self._failsafe_active = False
+
+    def _check_gcs_failsafe(self) -> None:
+        last = self._last_gcs_heartbeat_s
+        if not self._fs_gcs_enable or last is None or self._failsafe_active:
+            return
+        if self._state.t_s - last <= self._fs_timeout_s:
+            return
+        self._failsafe_active = True
+        with self._lock:
+            autonomous = self._mode in (MODE_GUIDED, MODE_AUTO, MODE_LOITER)
+        if autonomous:
+            self.failsafes += 1
+            self._set_mode(MODE_HOLD)
+            self._statustext("Failsafe: GCS heartbeat lost, Hold", mavlink.MAV_SEVERITY_WARNING)
 
     def _on_set_mode(self, msg) -> None:
         if msg.base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
