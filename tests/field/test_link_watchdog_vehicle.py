@@ -39,7 +39,7 @@ def test_a_cut_link_holds_the_boat_by_failsafe_and_the_watchdog_asks_hold_again_
         assert vehicle.goto(LAT0 + 0.01, LON0).ok  # 1.1 km north: underway for a while
         time.sleep(0.5)  # 5 simulated seconds at 10 x: no failsafe while the heartbeats come
         assert sim.mode == MODE_GUIDED
-        assert sim.failsafes == 0
+        assert sim.failsafe_times_s == []
         state = watchdog_start(time.monotonic())
         sim.cut_link(True)
         t_cut_sim, t_cut = sim.truth().t_s, time.monotonic()
@@ -57,17 +57,17 @@ def test_a_cut_link_holds_the_boat_by_failsafe_and_the_watchdog_asks_hold_again_
             verdicts.append((now - t_cut, verdict))
             state = verdict.state
             time.sleep(0.02)
-        # the boat held by itself within FS_TIMEOUT (3 s) plus one heartbeat interval (1 s) of simulated time
+        # the boat held by itself, on its own failsafe
         assert sim.mode == MODE_HOLD
-        assert sim.failsafes == 1
+        assert len(sim.failsafe_times_s) == 1
+        # FS_TIMEOUT after the last heartbeat, which came within one interval (1 simulated s) of the cut
+        assert 2.0 <= sim.failsafe_times_s[0] - t_cut_sim <= 3.0 + 2.0
         first_hold = next(t for t, v in verdicts if v.action == "hold")
         # the watchdog asks for HOLD once the vehicle link or the position is quiet past its timeout (1 s):
         # the last of each came at most 0.1 s (a heartbeat interval) before the cut; slack for a busy machine
         assert 0.85 < first_hold < 2.0
         assert {v.action for t, v in verdicts if t > first_hold} <= {"wait"}
-        held = sim.truth()
-        assert held.t_s - t_cut_sim < 30.0  # the simulation kept running
-        assert math.hypot(*held.vel_enu_mps) < 1e-9  # stopped (no current)
+        assert math.hypot(*sim.truth().vel_enu_mps) < 1e-9  # stopped (no current)
         sim.cut_link(False)
         deadline = time.monotonic() + 2.0
         again = None

@@ -347,8 +347,8 @@ class BoatSimulator:
         self._fs_timeout_s = float(fs_timeout_s)
         self._last_gcs_heartbeat_s: float | None = None
         self._failsafe_active = False
-        self.failsafes = 0
-        """Number of GCS failsafes triggered."""
+        self.failsafe_times_s: list[float] = []
+        """Simulated times at which the GCS failsafe switched the boat to HOLD."""
         self._rng = np.random.default_rng(seed)
         self._gps_noise_m = float(gps_noise_m)
         unknown = sorted(set(rates_hz or {}) - set(_DEFAULT_RATES_HZ))
@@ -686,7 +686,7 @@ class BoatSimulator:
         with self._lock:
             autonomous = self._mode in (MODE_GUIDED, MODE_AUTO, MODE_LOITER)
         if autonomous:
-            self.failsafes += 1
+            self.failsafe_times_s.append(self._state.t_s)
             self._set_mode(MODE_HOLD)
             self._statustext("Failsafe: GCS heartbeat lost, Hold", mavlink.MAV_SEVERITY_WARNING)
 
