@@ -407,3 +407,32 @@ def test_noisy_fixes_pass_qc_and_scatter_as_the_noise(boat_and_vehicle):
     assert abs(north.mean()) < 4 * 2.0 / math.sqrt(n)  # the truth does not move: HOLD, no current
     assert sim.truth().north_m == 0.0
     assert vehicle.qc.counts().get("gross outlier", 0) == 0
+
+
+def test_a_missing_serial_port_is_a_clear_error():
+    vehicle = MavlinkVehicle("serial:///dev/oceanloc-no-such-port?baud=57600")
+    with pytest.raises(
+        ConfigError, match="vehicle serial:///dev/oceanloc-no-such-port\\?baud=57600: cannot open"
+    ):
+        vehicle.connect(wait_heartbeat_s=0.1)
+    vehicle.close()
+
+
+@pytest.mark.parametrize(
+    ("options", "reason"),
+    [
+        ({"heartbeat_timeout_s": 0.0}, "heartbeat_timeout_s must be a positive number of seconds, got 0.0"),
+        ({"command_retries": -1}, "command_retries must be 0 or more, got -1"),
+        ({"gcs_heartbeat_hz": math.inf}, "gcs_heartbeat_hz must be a positive number, got inf"),
+    ],
+)
+def test_bad_adapter_options_are_refused(options, reason):
+    with pytest.raises(ConfigError, match=reason):
+        MavlinkVehicle("udp://127.0.0.1:14550", **options)
+
+
+def test_unknown_mode_names_are_refused_before_anything_is_sent():
+    vehicle = MavlinkVehicle("udp://127.0.0.1:14550")
+    with pytest.raises(ConfigError, match="mode 'ACRO': expected one of MANUAL, HOLD, LOITER, AUTO, GUIDED"):
+        vehicle.set_mode("ACRO")
+    assert vehicle.sent == []
