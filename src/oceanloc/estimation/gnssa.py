@@ -43,7 +43,7 @@ from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
-from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S, GnssaSurvey
 from oceanloc.models.acoustics import (
     gradient_path_jacobian,
     gradient_path_m2,
@@ -64,7 +64,7 @@ class GnssaOptions:
     Attributes
     ----------
     sound_speed_mps : float
-        Prior (or fixed) harmonic-mean sound speed, m/s.
+        Prior (or fixed) harmonic-mean sound speed, m/s (1500: nominal sea water; give the survey's).
     estimate_sound_speed : bool
         Make the sound speed an unknown with a prior; False fixes it.
     sigma_sound_speed_mps : float
@@ -106,7 +106,7 @@ class GnssaOptions:
         Add the survey-wide GNSS error (the mean per-ping GNSS covariance) to the reported covariance.
     """
 
-    sound_speed_mps: float
+    sound_speed_mps: float = 1500.0
     estimate_sound_speed: bool = True
     sigma_sound_speed_mps: float = 3.0
     knot_spacing_s: float | None = 900.0
@@ -242,6 +242,38 @@ class GnssaResult:
     @property
     def pings_used(self) -> int:
         return int(self.used.sum())
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: position and 1-sigma (E, N, U order as named), epoch, acoustic model."""
+        e, n, u = (float(v) for v in self.position_enu_m)
+        se, sn, su = (float(v) for v in self.sigma_enu_m)
+        record = {
+            "file": self.name,
+            "epoch_utc": gnssa_epoch_utc(self.epoch_s),
+            "e_m": e,
+            "n_m": n,
+            "u_m": u,
+            "sigma_e_m": se,
+            "sigma_n_m": sn,
+            "sigma_u_m": su,
+            "lat_deg": None,
+            "lon_deg": None,
+            "h_m": None,
+            "sound_speed_mps": float(self.sound_speed_mps),
+            "pings_used": self.pings_used,
+            "pings_excluded": len(self.exclusions),
+            "residual_rms_m": float(self.residual_rms_m),
+            "gradient_e_per_km": float(self.gradient_per_km[0]),
+            "gradient_n_per_km": float(self.gradient_per_km[1]),
+            "refraction_ppm": float(self.refraction_ppm),
+            "sigma_path_m": float(self.sigma_path_m),
+            "beta_m": float(self.beta_m),
+            "converged": bool(self.converged),
+        }
+        if self.position_geodetic is not None:
+            lat, lon, h = (float(v) for v in self.position_geodetic)
+            record.update(lat_deg=lat, lon_deg=lon, h_m=h)
+        return record
 
 
 @dataclass(frozen=True, slots=True)
@@ -598,3 +630,11 @@ def _positive_part(matrix: FloatArray) -> FloatArray:
     """The positive semi-definite part of a symmetric matrix."""
     w, v = np.linalg.eigh(0.5 * (matrix + matrix.T))
     return (v * np.maximum(w, 0.0)) @ v.T
+
+
+def gnssa_epoch_utc(epoch_s: float) -> str:
+    """A GNSS-A epoch (seconds after 2020-01-01 UTC, the files' time base) as ISO 8601 UTC."""
+    import datetime as dt
+
+    stamp = dt.datetime.fromtimestamp(GPS_EPOCH_2020_UNIX_S + float(epoch_s), tz=dt.UTC)
+    return stamp.isoformat(timespec="seconds")

@@ -4,21 +4,31 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
 from oceanloc.estimation.gnssa import GnssaResult
 from oceanloc.estimation.noise import StationaryNoise
+from oceanloc.field.gnssa_surveys import GnssaSurveys
 from oceanloc.field.repeatability import SurveySpread
 from oceanloc.io.gnssa import GnssaSurvey
 from oceanloc.report.figures._style import save_figure
 
 
-def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) -> Path:
+def write_gnssa_figures(surveys: GnssaSurveys, folder: Path) -> list[Path]:
+    """Every figure of ``localize gnssa --figures``: ``<survey>_residuals.png`` per survey and, for two or
+    more surveys, ``gnssa_spread.png``."""
+    paths = [
+        save_figure(gnssa_residual_figure(s, r), folder / f"{s.name}_residuals.png")
+        for s, r in zip(surveys.surveys, surveys.results, strict=True)
+    ]
+    if surveys.spread is not None:
+        fig = gnssa_spread_figure(list(surveys.results), surveys.spread)
+        paths.append(save_figure(fig, folder / "gnssa_spread.png"))
+    return paths
+
+
+def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult) -> Figure:
     """Residuals of one survey against time and horizontal offset, the track, and the sound speed.
 
     Used pings are dots, excluded pings crosses; the grey band is the per-ping +-1 sigma.
@@ -30,7 +40,8 @@ def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) 
         survey.transmit_enu_m[:, 1] - result.position_enu_m[1],
     )
     resid_cm = 100.0 * result.residual_m
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    fig = Figure(figsize=(11, 7.5))
+    axes = fig.subplots(2, 2)
     ax = axes[0, 0]
     order = np.argsort(t_min)
     ax.fill_between(t_min[order], -100 * result.sigma_m[order], 100 * result.sigma_m[order], color="0.85")
@@ -63,18 +74,16 @@ def gnssa_residual_figure(survey: GnssaSurvey, result: GnssaResult, path: Path) 
         f"{result.pings_used} pings, RMS {100 * result.residual_rms_m:.1f} cm"
     )
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return fig
 
 
-def gnssa_spread_figure(results: list[GnssaResult], spread: SurveySpread, path: Path) -> Path:
+def gnssa_spread_figure(results: list[GnssaResult], spread: SurveySpread) -> Figure:
     """Per-survey positions at the spread's reference epoch with 1-sigma bars, relative to the mean, for
     E, N and U."""
     pos, sig = spread.positions_enu_m, spread.sigma_enu_m
     dev_cm = 100.0 * (pos - pos.mean(axis=0))
-    fig, axes = plt.subplots(1, 3, figsize=(11, 3.8), sharey=True)
+    fig = Figure(figsize=(11, 3.8))
+    axes = fig.subplots(1, 3, sharey=True)
     idx = np.arange(len(results))
     for k, (ax, name) in enumerate(zip(axes, ("east", "north", "up"), strict=True)):
         ax.errorbar(dev_cm[:, k], idx, xerr=100.0 * sig[:, k], fmt="o", capsize=3)
@@ -84,13 +93,15 @@ def gnssa_spread_figure(results: list[GnssaResult], spread: SurveySpread, path: 
     moved = "as surveyed" if spread.velocity is None else f"moved to one epoch ({spread.velocity.source})"
     fig.suptitle(f"GNSS-A positions across surveys, {moved}", fontsize=10)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return fig
 
 
-def range_noise_figure(noise: list[StationaryNoise], path: Path) -> Path:
+def write_range_noise_figure(noise: list[StationaryNoise], path: Path) -> Path:
+    """``localize noise --figures``: :func:`range_noise_figure` as PNG."""
+    return save_figure(range_noise_figure(noise), path)
+
+
+def range_noise_figure(noise: list[StationaryNoise]) -> Figure:
     """Running range and noise estimates of eq. (30) per beacon, with +-1 standard error (PLANS Fig. 5)."""
     fig = Figure(figsize=(10, 3.6 * len(noise)))
     axes = fig.subplots(len(noise), 2, squeeze=False)
@@ -121,7 +132,7 @@ def range_noise_figure(noise: list[StationaryNoise], path: Path) -> Path:
         )
         ax_s.set_ylim(0.0, 3e3 * est.sigma_m)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return fig
 
 
 def _clip_limits(values: np.ndarray) -> tuple[float, float]:
