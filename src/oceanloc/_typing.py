@@ -1,8 +1,8 @@
-"""Array aliases and option sets shared across the package."""
+"""Array aliases shared across the package."""
 
 from __future__ import annotations
 
-from typing import Literal, TypeAlias
+from typing import TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +11,3 @@ FloatArray: TypeAlias = npt.NDArray[np.float64]
 IntArray: TypeAlias = npt.NDArray[np.int64]
 BoolArray: TypeAlias = npt.NDArray[np.bool_]
 ArrayLike: TypeAlias = npt.ArrayLike
-
-PlannerKind = Literal["random-yaw", "random-disk", "greedy", "lookahead"]
-PLANNER_KINDS: tuple[str, ...] = ("random-yaw", "random-disk", "greedy", "lookahead")

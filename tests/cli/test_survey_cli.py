@@ -30,7 +30,7 @@ def test_simulate_survey_monte_carlo_json(tmp_path):
     result = CliRunner().invoke(app, [*args, "--horizon", "2", "--json", str(out)])
     assert result.exit_code == 0, result.output
     record = json.loads(out.read_text())
-    assert record["planner"] == "k=2" and record["runs"] == 4 and len(record["rmsee_m"]) == 8
+    assert record["planner"] == "k2" and record["runs"] == 4 and len(record["rmsee_m"]) == 8
     assert record["nees"]["dof"] == 3
 
 

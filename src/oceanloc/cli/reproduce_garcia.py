@@ -21,6 +21,7 @@ from oceanloc.cli._common import (
 )
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import open_executor
+from oceanloc.planning.site_planners import site_planner_label
 from oceanloc.report.tables.survey import checks_table, reproduction_table
 from oceanloc.reproduce import garcia2018, garcia2019
 from oceanloc.reproduce.survey_tables import MajorAxisSweep
@@ -206,8 +207,8 @@ def _garcia2019_figures(result: garcia2019.Garcia2019Result, out: Path) -> None:
         result.fig5, out / "fig5_major_axis.png", "Fig. 5: k = 1 plan vs speed, after the first range"
     )
     runs = {
-        ("random (k = 0)" if k == 0 else f"k = {k}"): s.sample_run(0)
-        for k, s in sorted(result.studies["M4"].items())
+        site_planner_label(s.scenario.planner): s.sample_run(0)
+        for _, s in sorted(result.studies["M4"].items())
     }
     survey_figures.trajectories_figure(
         runs, out / "fig8_trajectories_m4.png", "Fig. 8: measurement paths, run 0"

@@ -7,6 +7,7 @@ from rich.table import Table
 
 from oceanloc.cli._common import console
 from oceanloc.config.survey import builtin_survey_scenarios, load_survey_scenario
+from oceanloc.planning.site_planners import site_planner_label
 from oceanloc.units import DEG
 
 app = typer.Typer(help="List and show built-in scenarios.", no_args_is_help=True)
@@ -20,7 +21,9 @@ def list_scenarios() -> None:
         table.add_column(col)
     for name in builtin_survey_scenarios():
         s = load_survey_scenario(name)
-        table.add_row(name, str(s.n_transponders), str(s.epochs), s.planner.label, s.description)
+        table.add_row(
+            name, str(s.n_transponders), str(s.epochs), site_planner_label(s.planner), s.description
+        )
     console.print(table)
 
 

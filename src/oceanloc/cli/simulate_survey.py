@@ -10,7 +10,6 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from oceanloc._typing import PLANNER_KINDS
 from oceanloc.cli import root, simulate
 from oceanloc.cli._common import (
     FiguresOut,
@@ -24,10 +23,10 @@ from oceanloc.cli._common import (
     write_json,
 )
 from oceanloc.config.survey import PlannerSettings, SurveyScenario, load_survey_scenario
-from oceanloc.errors import ConfigError
 from oceanloc.estimation.consistency import confidence_ellipse
 from oceanloc.evaluation.montecarlo import open_executor
 from oceanloc.evaluation.survey import SurveyMonteCarlo, survey_monte_carlo
+from oceanloc.planning.site_planners import parse_site_planner, site_planner_label, site_planner_name
 from oceanloc.sim.survey import SurveyRuns, simulate_surveys
 
 _REPORT_EPOCHS = (3, 7, 30)
@@ -42,7 +41,9 @@ def survey_command(
         None, "--runs", min=1, help="Runs (default: the scenario's; 1: one survey)."
     ),
     planner: str | None = typer.Option(
-        None, "--planner", help=f"Override the planner ({', '.join(PLANNER_KINDS)})."
+        None,
+        "--planner",
+        help="Override the planner: k0 (random yaw), k1..k10 (look-ahead), greedy, random-disk.",
     ),
     horizon: int | None = typer.Option(None, "--horizon", min=1, help="Override the look-ahead steps k."),
     epochs: int | None = typer.Option(None, "--epochs", min=1, help="Override the number of epochs N."),
@@ -81,15 +82,14 @@ def demo_command(
 def _with_overrides(
     scen: SurveyScenario, planner: str | None, horizon: int | None, epochs: int | None
 ) -> SurveyScenario:
-    if planner is not None and planner not in PLANNER_KINDS:
-        raise ConfigError(f"--planner must be one of {', '.join(PLANNER_KINDS)}; got '{planner}'")
     if planner is not None or horizon is not None:
-        settings = dataclasses.replace(
-            scen.planner,
-            kind=planner or scen.planner.kind,  # type: ignore[arg-type]
-            horizon=horizon or scen.planner.horizon,
+        cur = scen.planner
+        keep = "lookahead" if cur.kind == "lookahead" else site_planner_name(cur)
+        scen = scen.with_planner(
+            parse_site_planner(
+                planner or keep, horizon=horizon or cur.horizon, max_distance_m=cur.max_distance_m
+            )
         )
-        scen = scen.with_planner(settings)
     if epochs is not None:
         scen = dataclasses.replace(scen, epochs=epochs)
     return scen
@@ -103,7 +103,9 @@ def _single_run(scen: SurveyScenario, seed: int, json_path: Path | None, figures
     cov = run.covariances_m2[0, -1]
     ell = confidence_ellipse(final[:, :2], cov[:, :2, :2])
     sigma_u = np.sqrt(cov[:, 2, 2])
-    table = Table(title=f"After {scen.epochs} epochs (planner {scen.planner.label}, seed {seed})")
+    table = Table(
+        title=f"After {scen.epochs} epochs (planner {site_planner_label(scen.planner)}, seed {seed})"
+    )
     columns = ("m", "truth E, N, U (m)", "estimate E, N, U (m)", "error (m)", "95% ellipse a x b (m), dir")
     for col in (*columns, "1-sigma U (m)"):
         table.add_column(col, justify="right")
@@ -123,7 +125,7 @@ def _single_run(scen: SurveyScenario, seed: int, json_path: Path | None, figures
     if figures:
         out = ensure_dir(figures)
         path = survey_figures.trajectories_figure(
-            {f"planner {scen.planner.label}": run}, out / f"{scen.name}_trajectory.png",
+            {f"planner {site_planner_label(scen.planner)}": run}, out / f"{scen.name}_trajectory.png",
             f"{scen.name}: measurement path and 95% ellipses", ellipses=True,
         )  # fmt: skip
         console.print(f"wrote {path}")
@@ -132,7 +134,7 @@ def _single_run(scen: SurveyScenario, seed: int, json_path: Path | None, figures
             json_path,
             {
                 "scenario": scen.name,
-                "planner": scen.planner.label,
+                "planner": site_planner_name(scen.planner),
                 "seed": seed,
                 "transponders": [
                     {
@@ -175,8 +177,9 @@ def _monte_carlo_report(result: SurveyMonteCarlo, json_path: Path | None, figure
     from oceanloc.report.figures import survey as survey_figures
 
     scen = result.scenario
+    label = site_planner_label(scen.planner)
     epochs = sorted({n for n in (*_REPORT_EPOCHS, scen.epochs) if n <= scen.epochs})
-    table = Table(title=f"{scen.name}: {result.runs} runs, planner {scen.planner.label}, seed {result.seed}")
+    table = Table(title=f"{scen.name}: {result.runs} runs, planner {label}, seed {result.seed}")
     table.add_column("epoch n", justify="right")
     for m in range(scen.n_transponders):
         table.add_column(f"RMSEE m={m + 1} (m)", justify="right")
@@ -200,7 +203,7 @@ def _monte_carlo_report(result: SurveyMonteCarlo, json_path: Path | None, figure
         survey_figures.logdet_rmse_figure({0: result}, 0, out / f"{scen.name}_logdet_rmse.png", scen.name)
         survey_figures.nees_figure(result.nees[:, -1], c.dof, out / f"{scen.name}_nees.png", scen.name)
         survey_figures.trajectories_figure(
-            {f"planner {scen.planner.label}": result.sample_run(0)}, out / f"{scen.name}_trajectory_run0.png",
+            {label: result.sample_run(0)}, out / f"{scen.name}_trajectory_run0.png",
             f"{scen.name}: run 0", ellipses=True,
         )  # fmt: skip
         console.print(f"wrote figures to {out}")
@@ -209,7 +212,7 @@ def _monte_carlo_report(result: SurveyMonteCarlo, json_path: Path | None, figure
             json_path,
             {
                 "scenario": scen.name,
-                "planner": scen.planner.label,
+                "planner": site_planner_name(scen.planner),
                 "runs": result.runs,
                 "seed": result.seed,
                 "rmsee_m": result.rmsee_m,

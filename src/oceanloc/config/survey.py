@@ -46,50 +46,11 @@ from pathlib import Path
 
 import numpy as np
 
-from oceanloc._typing import PLANNER_KINDS, FloatArray, PlannerKind
+from oceanloc._typing import FloatArray
 from oceanloc.config.builtin import builtin_names, resolve_scenario
 from oceanloc.config.toml_fields import Table
-from oceanloc.errors import ConfigError
+from oceanloc.planning.site_planners import SITE_PLANNER_KINDS, PlannerSettings
 from oceanloc.units import DEG
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class PlannerSettings:
-    """Which measurement-site planner to run and its parameters.
-
-    Attributes
-    ----------
-    kind : {"random-yaw", "random-disk", "greedy", "lookahead"}
-        ``random-yaw``: yaw rate uniform in ``[-w_max, w_max]`` (the journal's k = 0);
-        ``random-disk``: a point uniform in the disk of radius ``max_distance_m`` (the thesis' baseline);
-        ``greedy``: D-optimal point within ``max_distance_m`` (PLANS 2018 eqs. 18-29);
-        ``lookahead``: D-optimal yaw-rate sequence over ``horizon`` steps (journal eqs. 28-40).
-    horizon : int
-        Look-ahead steps ``k``.
-    max_distance_m : float
-        Reach ``d_max`` between epochs for the point planners, metres.
-    """
-
-    kind: PlannerKind = "lookahead"
-    horizon: int = 1
-    max_distance_m: float = 5.0
-
-    def __post_init__(self) -> None:
-        if self.kind not in PLANNER_KINDS:
-            raise ConfigError(f"planner kind must be one of {', '.join(PLANNER_KINDS)}; got '{self.kind}'")
-        if self.horizon < 1:
-            raise ConfigError(f"planner horizon must be at least 1, got {self.horizon}")
-        if not self.max_distance_m > 0:
-            raise ConfigError(f"planner max_distance_m must be positive, got {self.max_distance_m}")
-
-    @property
-    def label(self) -> str:
-        """Short label used in tables: ``k=0`` for random baselines, ``k=2`` or ``greedy``."""
-        if self.kind.startswith("random"):
-            return "k=0"
-        if self.kind == "greedy":
-            return "greedy"
-        return f"k={self.horizon}"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -204,7 +165,7 @@ def survey_scenario_from_table(root: Table) -> SurveyScenario:
 
     plan_t = root.table("planner", required=False)
     planner = PlannerSettings(
-        kind=plan_t.str("kind", "lookahead", choices=PLANNER_KINDS),  # type: ignore[arg-type]
+        kind=plan_t.str("kind", "lookahead", choices=SITE_PLANNER_KINDS),  # type: ignore[arg-type]
         horizon=plan_t.int("horizon", 1, lo=1, hi=10),
         max_distance_m=plan_t.float("max_distance_m", 5.0, lo=0.0, lo_open=True),
     )

@@ -15,10 +15,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from oceanloc._typing import PLANNER_KINDS
 from oceanloc.config.survey import PlannerSettings
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.geo.enu import EnuOrigin
+from oceanloc.planning.site_planners import SITE_PLANNER_KINDS
 from oceanloc.units import DEG
 
 
@@ -130,7 +130,7 @@ class JournalSettings:
 
         try:
             kind = get("planner")
-            if kind not in PLANNER_KINDS:
+            if kind not in SITE_PLANNER_KINDS:
                 raise DataError(f"{source}: survey setting 'planner' is {kind!r}")
             origin = get("origin_lat_lon_h")
             return JournalSettings(

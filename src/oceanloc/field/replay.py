@@ -51,7 +51,7 @@ from oceanloc.estimation.map_gauss_newton import (
 from oceanloc.models.measurements import two_way_range_jacobian, two_way_range_m
 from oceanloc.planning.information import log_det_information
 from oceanloc.planning.measurement_sites import MeasurementSitePlanner, PlanningState
-from oceanloc.sim.survey import build_planner
+from oceanloc.planning.site_planners import make_site_planner
 from oceanloc.units import DEG
 
 RECORDED = "recorded"
@@ -480,7 +480,7 @@ def _build(planner: str, settings: ReplaySettings, records: RecordSet) -> Measur
     spec = planner_settings(planner, settings.reach_m)
     if spec is None:
         return None
-    return build_planner(
+    return make_site_planner(
         spec,
         max_yaw_rate_rad_s=settings.max_yaw_rate_rad_s,
         speed_mps=settings.speed_mps,

@@ -9,7 +9,7 @@ in one go or by a process that was killed and re-run.
   :data:`MIN_RANGES` aligned ranges by robust MAP (:func:`localize_beacons`); every range gets a status
   (used, outlier, no GPS, beacon still waiting for ranges). Each estimate carries its 95 % confidence
   ellipse (Garcia et al. 2019, Appendix B) in east-north.
-* :func:`next_waypoint` runs the survey's planner (:func:`build_planner`) once from the last fix with
+* :func:`next_waypoint` runs the survey's planner (:func:`make_site_planner`) once from the last fix with
   the current estimates: greedy D-optimal point within ``d_max``, look-ahead over ``k`` yaw rates, or a
   random baseline. The yaw-rate planners need the vehicle's heading: the latest HDT heading if one was
   recorded since the previous fix, else the course between the last two fixes, else the heading given
@@ -31,8 +31,8 @@ from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.journal import JournalRecords
 from oceanloc.io.usbl import AlignedRanges, align_ranges
 from oceanloc.planning.measurement_sites import PlanningState
+from oceanloc.planning.site_planners import make_site_planner
 from oceanloc.planning.status import PlanStatus
-from oceanloc.sim.survey import build_planner
 
 MIN_RANGES = 4
 """Aligned ranges a beacon needs before it is estimated (three unknowns, one redundant range)."""
@@ -311,7 +311,7 @@ def next_waypoint(
     else:
         yaw, source = 0.0, "unused"
     start = est.track_enu_m[-1]
-    planner = build_planner(
+    planner = make_site_planner(
         settings.planner,
         max_yaw_rate_rad_s=settings.max_yaw_rate_rad_s,
         speed_mps=settings.speed_mps,

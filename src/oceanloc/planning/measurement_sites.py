@@ -1,7 +1,7 @@
 """Where to measure next: D-optimal measurement-site planners and random baselines.
 
-All planners share one shape (OMPL's lesson: a problem, a planner, ``plan(...) -> PlanResult``) and are
-batched: ``B`` independent planning problems (Monte Carlo runs) are solved in one call.
+All planners share one shape (OMPL's lesson: a problem, a planner, ``plan(...) -> SitePlanResult``) and
+are batched: ``B`` independent planning problems (Monte Carlo runs) are solved in one call.
 
 * :class:`LookaheadPlanner` - multi-step look-ahead over yaw rates (Garcia et al. 2019, eqs. 28-40):
   choose ``omega_1..omega_k`` in ``[-w_max, w_max]^k`` to maximize the information gain of the ``k`` sites
@@ -61,7 +61,7 @@ class PlanningState:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class PlanResult:
+class SitePlanResult:
     """A batch of plans.
 
     Attributes
@@ -91,9 +91,9 @@ class PlanResult:
 
 
 class MeasurementSitePlanner(Protocol):
-    """Anything with ``plan(state, rng) -> PlanResult``."""
+    """Anything with ``plan(state, rng) -> SitePlanResult``."""
 
-    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult: ...
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult: ...
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -139,13 +139,13 @@ class LookaheadPlanner:
         """Information gain of yaw-rate sequences ``(B, C, k)`` -> ``(B, C)``."""
         return _YawRateObjective(state, self)(yaw_rates_rad_s, np.arange(state.batch))
 
-    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """The D-optimal yaw-rate sequence for each problem (``rng`` is not used)."""
         start = time.perf_counter()
         lower, upper = self.bounds()
         best = maximize_in_box(_YawRateObjective(state, self), lower, upper, state.batch, options=self.search)
         poses = unicycle_rollout(state.pos_enu_m, state.yaw_rad, best.x, self.speed_mps, self.period_s)
-        return PlanResult(
+        return SitePlanResult(
             next_pos_enu_m=poses.pos_enu_m[:, 0],
             next_yaw_rad=poses.yaw_rad[:, 0],
             waypoints_enu_m=poses.pos_enu_m,
@@ -289,7 +289,7 @@ class GreedyPlanner:
         chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
         return information_gain(points_enu_m[..., None, :], state.estimates_m[:, None], chol)
 
-    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """The D-optimal point within reach for each problem (``rng`` is not used)."""
         start = time.perf_counter()
         chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)[:, None]
@@ -303,7 +303,7 @@ class GreedyPlanner:
             options=self.search,
         )
         site = self.sites(state, best.x[:, None, :])[:, 0, 0]
-        return PlanResult(
+        return SitePlanResult(
             next_pos_enu_m=site,
             next_yaw_rad=_heading_to(state, site),
             waypoints_enu_m=site[:, None, :],
@@ -322,7 +322,7 @@ class RandomYawPlanner:
     period_s: float
     sigma_range_m: float
 
-    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """Draw one yaw rate per problem from ``rng`` (one generator, or one per problem)."""
         if rng is None:
             raise ConfigError("the random planner needs a random generator")
@@ -331,7 +331,7 @@ class RandomYawPlanner:
         poses = unicycle_rollout(state.pos_enu_m, state.yaw_rad, rates, self.speed_mps, self.period_s)
         chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)
         gain = information_gain(poses.pos_enu_m, state.estimates_m, chol)
-        return PlanResult(
+        return SitePlanResult(
             next_pos_enu_m=poses.pos_enu_m[:, 0],
             next_yaw_rad=poses.yaw_rad[:, 0],
             waypoints_enu_m=poses.pos_enu_m,
@@ -348,7 +348,7 @@ class RandomDiskPlanner:
     max_distance_m: float
     sigma_range_m: float
 
-    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> PlanResult:
+    def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """Draw one point per problem from ``rng`` (one generator, or one per problem)."""
         if rng is None:
             raise ConfigError("the random planner needs a random generator")
@@ -359,7 +359,7 @@ class RandomDiskPlanner:
         site = state.pos_enu_m + np.stack([rho * np.cos(theta), rho * np.sin(theta), 0.0 * rho], -1)
         chol = scaled_cholesky(state.covariances_m2, self.sigma_range_m)
         gain = information_gain(site[:, None, :], state.estimates_m, chol)
-        return PlanResult(
+        return SitePlanResult(
             next_pos_enu_m=site,
             next_yaw_rad=_heading_to(state, site),
             waypoints_enu_m=site[:, None, :],

@@ -26,19 +26,13 @@ import numpy as np
 
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from oceanloc.config.survey import PlannerSettings, SurveyScenario
+from oceanloc.config.survey import SurveyScenario
 from oceanloc.estimation.consistency import nees
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, RangeProblem, solve_map
 from oceanloc.models.measurements import range_m
 from oceanloc.planning.information import log_det_information
-from oceanloc.planning.measurement_sites import (
-    GreedyPlanner,
-    LookaheadPlanner,
-    MeasurementSitePlanner,
-    PlanningState,
-    RandomDiskPlanner,
-    RandomYawPlanner,
-)
+from oceanloc.planning.measurement_sites import MeasurementSitePlanner, PlanningState
+from oceanloc.planning.site_planners import make_site_planner
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -99,38 +93,9 @@ class SurveyRuns:
         return int(self.run_indices.size)
 
 
-def build_planner(
-    settings: PlannerSettings,
-    *,
-    max_yaw_rate_rad_s: float,
-    speed_mps: float,
-    period_s: float,
-    sigma_range_m: float,
-) -> MeasurementSitePlanner:
-    """The planner a :class:`PlannerSettings` names, with the vehicle and sensor parameters."""
-    if settings.kind == "lookahead":
-        return LookaheadPlanner(
-            horizon=settings.horizon,
-            max_yaw_rate_rad_s=max_yaw_rate_rad_s,
-            speed_mps=speed_mps,
-            period_s=period_s,
-            sigma_range_m=sigma_range_m,
-        )
-    if settings.kind == "greedy":
-        return GreedyPlanner(max_distance_m=settings.max_distance_m, sigma_range_m=sigma_range_m)
-    if settings.kind == "random-yaw":
-        return RandomYawPlanner(
-            max_yaw_rate_rad_s=max_yaw_rate_rad_s,
-            speed_mps=speed_mps,
-            period_s=period_s,
-            sigma_range_m=sigma_range_m,
-        )
-    return RandomDiskPlanner(max_distance_m=settings.max_distance_m, sigma_range_m=sigma_range_m)
-
-
 def scenario_planner(scenario: SurveyScenario) -> MeasurementSitePlanner:
     """The scenario's own planner."""
-    return build_planner(
+    return make_site_planner(
         scenario.planner,
         max_yaw_rate_rad_s=scenario.max_yaw_rate_rad_s,
         speed_mps=scenario.speed_mps,

@@ -12,14 +12,11 @@ from scipy import stats
 from oceanloc._typing import FloatArray
 from oceanloc.estimation.consistency import ConfidenceEllipse, confidence_ellipse
 from oceanloc.evaluation.survey import SurveyMonteCarlo
+from oceanloc.planning.site_planners import site_planner_label
 from oceanloc.report.figures._style import save_figure
 from oceanloc.sim.survey import SurveyRuns
 
 _K_COLOURS = {0: "tab:gray", 1: "tab:blue", 2: "tab:orange", 3: "tab:green"}
-
-
-def _k_label(k: int) -> str:
-    return "random (k = 0)" if k == 0 else f"k = {k}"
 
 
 def estimates_figure(
@@ -63,8 +60,9 @@ def logdet_rmse_figure(
     ax_ld, ax_rm = fig.subplots(1, 2)
     for k, study in sorted(studies.items()):
         n = np.arange(1, study.log_det.mean.size + 1)
-        ax_ld.plot(n, study.log_det.mean, color=_K_COLOURS.get(k), label=_k_label(k))
-        ax_rm.semilogy(n, study.rmsee_m[:, transponder], color=_K_COLOURS.get(k), label=_k_label(k))
+        label = site_planner_label(study.scenario.planner)
+        ax_ld.plot(n, study.log_det.mean, color=_K_COLOURS.get(k), label=label)
+        ax_rm.semilogy(n, study.rmsee_m[:, transponder], color=_K_COLOURS.get(k), label=label)
     ax_ld.set(xlabel="measurement n", ylabel="mean log det Y_n", title="(a) D-optimal value")
     ax_rm.set(xlabel="measurement n", ylabel=f"RMSEE of transponder {transponder + 1} [m]", title="(b) RMSEE")
     for ax in (ax_ld, ax_rm):
