@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 from oceanloc.evaluation.replay import ReplayStudy
 from oceanloc.field.replay import RECORDED, RecordSet, planner_label
 from oceanloc.report.figures._style import save_figure
+from oceanloc.reproduce.garcia2019_replay import ReplayExperiment
 
 _COLOURS = {
     RECORDED: "black",
@@ -21,6 +22,18 @@ _COLOURS = {
     "greedy": "tab:red",
     "random-disk": "tab:purple",
 }
+
+
+def write_replay_figures(exp: ReplayExperiment, folder: Path, stem: str, *, unit_m: float) -> list[Path]:
+    """Every figure of ``replay logs/gnssa --figures`` for one record set: ``<stem>_replay_curves.png``
+    and ``<stem>_replay_tracks.png``."""
+    curves = replay_curves_figure(
+        exp.studies, 0, folder / f"{stem}_replay_curves.png",
+        f"{exp.records.name}: replay on recorded data", unit_m=unit_m,
+    )  # fmt: skip
+    title = f"{exp.records.name}: chosen records, run 0"
+    tracks = replay_tracks_figure(exp.records, exp.studies, folder / f"{stem}_replay_tracks.png", title)
+    return [curves, tracks]
 
 
 def replay_curves_figure(
