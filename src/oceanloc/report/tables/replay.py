@@ -95,7 +95,8 @@ def gnssa_reference_line(res: GnssaReplay) -> str:
     """The reference solution a GNSS-A replay is measured against (all pings)."""
     e, n, u = res.reference.position_enu_m
     return (
-        f"[bold]{escape(res.survey)}[/bold]: reference (all {res.reference.pings_used} pings used) "
+        f"[bold]{escape(res.survey)}[/bold]: reference (solution over all pings, "
+        f"{res.reference.pings_used} used) "
         f"E {e:+.3f} N {n:+.3f} U {u:+.3f} m (file frame)"
     )
 
