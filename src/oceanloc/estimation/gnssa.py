@@ -410,6 +410,11 @@ def hat_basis(t_s: FloatArray, knots_s: FloatArray) -> FloatArray:
 def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     """Robust MAP position of the transponder of one survey (see the module docstring).
 
+    Four steps, each a function returning a small frozen result: :func:`gnssa_setup` (the MAP problem
+    and its prior), :func:`elevation_cut` (far pings dropped before solving), :func:`robust_solve`
+    (MAP, noise components and the one-at-a-time outlier rule) and :func:`gnssa_covariance` (formal,
+    jackknife and GNSS common-mode parts).
+
     Parameters
     ----------
     survey : GnssaSurvey
@@ -419,6 +424,82 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     -------
     GnssaResult
     """
+    setup = gnssa_setup(survey, options)
+    cut = elevation_cut(survey, options, setup.initial_m)
+    if cut.candidates.sum() < setup.dim + 2:
+        raise DataError(
+            f"{survey.path}: {int(cut.candidates.sum())} usable pings, need at least {setup.dim + 2}"
+        )
+    sol = robust_solve(survey, options, setup, cut)
+    cov = gnssa_covariance(survey, options, setup, sol)
+    x, used, k0 = sol.x, sol.used, setup.first_knot
+    problem = setup.template.with_mask(used[None, :], sol.sigma_m)
+    resid = _path_residual(problem, x)[0]
+    speed = problem.speed(x)[0]
+    geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
+    return GnssaResult(
+        name=survey.name,
+        position_enu_m=x[0, :3].copy(),
+        covariance_m2=cov.total_m2,
+        covariance_formal_m2=cov.formal_m2,
+        covariance_jackknife_m2=cov.jackknife_m2,
+        position_geodetic=geodetic,
+        epoch_s=float(np.mean(survey.t_transmit_s[used])),
+        knot_times_s=setup.knots_s,
+        sound_speed_knots_mps=x[0, k0:].copy(),
+        gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),
+        refraction_ppm=float(x[0, k0 - 1]) if options.estimate_refraction else 0.0,
+        covariance_gnss_m2=cov.gnss_m2,
+        sound_speed_mps=float(np.mean(speed[used])),
+        used=used,
+        exclusions=cut.exclusions + sol.exclusions,
+        residual_m=resid,
+        sigma_m=sol.sigma_m,
+        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
+        sigma_path_m=float(sol.sigma_path_m),
+        beta_m=float(sol.beta_m),
+        converged=sol.converged,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaSetup:
+    """The MAP problem of one survey before any ping is dropped (:func:`gnssa_setup`).
+
+    Attributes
+    ----------
+    template : GnssaProblem
+        Every ping, unit sigmas (masks and sigmas are set per solve).
+    knots_s : (K,) float
+        Sound-speed knot times (empty: one constant speed).
+    t_mid_s : (n,) float
+        Mid-times of the pings (transmit and receive averaged), seconds.
+    initial_m : (3,) float
+        Starting position: below the ping with the shortest travel time, metres.
+    prior : GaussianPrior
+        Position, gradient, refraction and knot prior.
+    map_options : MapOptions
+    """
+
+    template: GnssaProblem
+    knots_s: FloatArray
+    t_mid_s: FloatArray
+    initial_m: FloatArray
+    prior: GaussianPrior
+    map_options: MapOptions
+
+    @property
+    def first_knot(self) -> int:
+        return self.template.first_knot
+
+    @property
+    def dim(self) -> int:
+        return self.first_knot + int(self.knots_s.size)
+
+
+def gnssa_setup(survey: GnssaSurvey, options: GnssaOptions) -> GnssaSetup:
+    """The survey's MAP problem and prior: knots, hat basis, initial guess, prior covariance (position,
+    gradient, refraction, exponentially correlated knots) and the surface constraint."""
     n = survey.n_pings
     tx, rx = survey.transmit_enu_m, survey.receive_enu_m
     twtt = survey.twtt_s - options.turnaround_s
@@ -441,7 +522,6 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     )
     k0 = template.first_knot
     dim = k0 + n_knots
-
     x0 = _initial_guess(tx, twtt, options.sound_speed_mps)
     prior_mean = np.concatenate([x0, np.zeros(k0 - 3), np.full(n_knots, options.sound_speed_mps)])[None, :]
     prior_var = [options.sigma_position_prior_m**2] * 3
@@ -456,15 +536,34 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         prior_cov[k0:, k0:] = options.sigma_sound_speed_mps**2 * np.exp(
             -lag / options.sound_speed_correlation_s
         )
-    prior = GaussianPrior(mean=prior_mean, cov=prior_cov)
     surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
-    map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface)
+    return GnssaSetup(
+        template=template,
+        knots_s=knots,
+        t_mid_s=t_mid,
+        initial_m=x0,
+        prior=GaussianPrior(mean=prior_mean, cov=prior_cov),
+        map_options=MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface),
+    )
 
-    candidates = np.ones(n, dtype=bool)
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PingSelection:
+    """Pings kept for solving (:func:`elevation_cut`): ``candidates (n,)`` and the far pings dropped."""
+
+    candidates: BoolArray
+    exclusions: tuple[Exclusion, ...]
+
+
+def elevation_cut(survey: GnssaSurvey, options: GnssaOptions, initial_m: FloatArray) -> PingSelection:
+    """Drop pings farther than ``max_tan_incidence`` depths horizontally from ``initial_m`` (none when the
+    cut is off)."""
+    tx = survey.transmit_enu_m
+    candidates = np.ones(survey.n_pings, dtype=bool)
     exclusions: list[Exclusion] = []
     if options.max_tan_incidence is not None:
-        depth = np.maximum(tx[:, 2] - x0[2], 1.0)
-        tan_inc = np.hypot(tx[:, 0] - x0[0], tx[:, 1] - x0[1]) / depth
+        depth = np.maximum(tx[:, 2] - initial_m[2], 1.0)
+        tan_inc = np.hypot(tx[:, 0] - initial_m[0], tx[:, 1] - initial_m[1]) / depth
         for i in np.flatnonzero(tan_inc > options.max_tan_incidence):
             candidates[i] = False
             exclusions.append(
@@ -476,14 +575,53 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
                     residual_m=float("nan"),
                 )
             )
-    if candidates.sum() < dim + 2:
-        raise DataError(f"{survey.path}: {int(candidates.sum())} usable pings, need at least {dim + 2}")
+    return PingSelection(candidates=candidates, exclusions=tuple(exclusions))
 
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RobustSolution:
+    """The MAP solution after the outlier rule (:func:`robust_solve`).
+
+    Attributes
+    ----------
+    x : (1, dim) float
+        Unknowns: position, gradient, refraction, sound-speed knots.
+    covariance : (1, dim, dim) float
+        MAP covariance at the last solve.
+    used : (n,) bool
+    sigma_m : (n,) float
+        Per-ping path sigma with the estimated noise components, metres.
+    sigma_path_m, beta_m : float
+        Estimated path noise and far-ping noise per unit tan(incidence), metres.
+    exclusions : tuple of Exclusion
+        Outliers, in the order they were removed.
+    converged : bool
+    """
+
+    x: FloatArray
+    covariance: FloatArray
+    used: BoolArray
+    sigma_m: FloatArray
+    sigma_path_m: float
+    beta_m: float
+    exclusions: tuple[Exclusion, ...]
+    converged: bool
+
+
+def robust_solve(
+    survey: GnssaSurvey, options: GnssaOptions, setup: GnssaSetup, selection: PingSelection
+) -> RobustSolution:
+    """MAP with the noise components re-estimated (three rounds per solve), removing the ping with the
+    largest normalized residual while it exceeds ``outlier_threshold`` (Xie et al. 2023), at most
+    ``max_outlier_fraction`` of the candidates."""
+    template, prior, map_opts = setup.template, setup.prior, setup.map_options
+    candidates = selection.candidates
     sigma_path, beta = 0.05, 0.0
     used = candidates.copy()
-    x = prior_mean.copy()
+    x = prior.mean.copy()
     max_out = int(options.max_outlier_fraction * candidates.sum())
     n_out = 0
+    exclusions: list[Exclusion] = []
     while True:
         gnss_var, tan_inc = _gnss_variance(x[0, :3], survey)
         result = None
@@ -515,38 +653,43 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
                 residual_m=float(resid[worst]),
             )
         )
-
-    problem = template.with_mask(used[None, :], sigma)
-    cov_formal = result.covariance[0, :3, :3]
-    cov_jk = _jackknife(problem, prior, map_opts, x, t_mid, used, options.jackknife_blocks)
-    cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
-    cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
-    cov = cov + cov_gnss
-    resid = _path_residual(problem, x)[0]
-    speed = problem.speed(x)[0]
-    geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
-    return GnssaResult(
-        name=survey.name,
-        position_enu_m=x[0, :3].copy(),
-        covariance_m2=cov,
-        covariance_formal_m2=cov_formal,
-        covariance_jackknife_m2=cov_jk,
-        position_geodetic=geodetic,
-        epoch_s=float(np.mean(survey.t_transmit_s[used])),
-        knot_times_s=knots,
-        sound_speed_knots_mps=x[0, k0:].copy(),
-        gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),
-        refraction_ppm=float(x[0, k0 - 1]) if options.estimate_refraction else 0.0,
-        covariance_gnss_m2=cov_gnss,
-        sound_speed_mps=float(np.mean(speed[used])),
+    return RobustSolution(
+        x=x,
+        covariance=result.covariance,
         used=used,
-        exclusions=tuple(exclusions),
-        residual_m=resid,
         sigma_m=sigma,
-        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
         sigma_path_m=float(sigma_path),
         beta_m=float(beta),
+        exclusions=tuple(exclusions),
         converged=bool(result.converged[0]),
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaCovariance:
+    """The reported position covariance and its parts (:func:`gnssa_covariance`), (3, 3) m^2 each."""
+
+    formal_m2: FloatArray
+    jackknife_m2: FloatArray | None
+    gnss_m2: FloatArray
+    total_m2: FloatArray
+
+
+def gnssa_covariance(
+    survey: GnssaSurvey, options: GnssaOptions, setup: GnssaSetup, solution: RobustSolution
+) -> GnssaCovariance:
+    """Formal MAP covariance plus the positive part of (jackknife - formal), plus the survey-wide GNSS
+    error when ``gnss_common_mode``."""
+    used = solution.used
+    problem = setup.template.with_mask(used[None, :], solution.sigma_m)
+    cov_formal = solution.covariance[0, :3, :3]
+    cov_jk = _jackknife(
+        problem, setup.prior, setup.map_options, solution.x, setup.t_mid_s, used, options.jackknife_blocks
+    )
+    cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
+    cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
+    return GnssaCovariance(
+        formal_m2=cov_formal, jackknife_m2=cov_jk, gnss_m2=cov_gnss, total_m2=cov + cov_gnss
     )
 
 
