@@ -8,7 +8,7 @@ from oceanloc.cli.app import app, main
 def test_demo_prints_the_table_and_writes_the_trajectory(tmp_path):
     result = CliRunner().invoke(app, ["demo", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert "After 50 epochs" in result.output and "Error and D-optimal value by epoch" in result.output
+    assert "after 50 epochs" in result.output and "Error and D-optimal value by epoch" in result.output
     assert "NEES at n = 50" in result.output
     assert (tmp_path / "garcia2019-m4_trajectory.png").stat().st_size > 10_000
 
@@ -69,3 +69,67 @@ def test_reproduce_garcia2019_small(tmp_path):
         "fig8_trajectories_m4.png",
     } <= names
     assert len(names) == 8
+
+
+def _oceanloc(*args):
+    import os
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "oceanloc", *args], capture_output=True, text=True, env=os.environ, timeout=120
+    )
+
+
+def test_usage_errors_of_the_survey_commands_exit_2_with_one_line():
+    for args, reason in (
+        (
+            ("simulate", "survey", "--scenario", "garcia2019-m1", "--planner", "best"),
+            "unknown planner 'best'",
+        ),
+        (("scenarios", "show", "nope"), "'nope' is neither a scenario file nor a built-in scenario"),
+        (("reproduce", "garcia2019", "--horizons", "0,x"), "--horizons must be comma-separated integers"),
+    ):
+        proc = _oceanloc(*args)
+        assert proc.returncode == 2, proc.stderr
+        assert reason in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+
+
+def test_simulate_survey_netcdf_and_json_carry_the_scenario_hash(tmp_path):
+    import hashlib
+
+    import xarray as xr
+
+    from oceanloc.config.survey import load_survey_scenario
+
+    args = [
+        "simulate",
+        "survey",
+        "--scenario",
+        "garcia2019-m1",
+        "--runs",
+        "3",
+        "--epochs",
+        "4",
+        "--workers",
+        "1",
+    ]
+    nc, js = tmp_path / "mc.nc", tmp_path / "mc.json"
+    result = CliRunner().invoke(app, [*args, "--planner", "k0", "--netcdf", str(nc), "--json", str(js)])
+    assert result.exit_code == 0, result.output
+    digest = hashlib.sha256(load_survey_scenario("garcia2019-m1").toml_text.encode()).hexdigest()
+    record = json.loads(js.read_text())
+    assert record["provenance"]["scenario"] == "garcia2019-m1"
+    assert record["provenance"]["scenario_sha256"] == digest
+    assert len(record["consistency_by_epoch"]["mean_nees"]) == 4
+    with xr.open_dataset(nc) as ds:
+        assert dict(ds.sizes) == {"epoch": 4, "transponder": 1, "run": 3}
+        assert ds.attrs["scenario_sha256"] == digest and ds["rmsee"].attrs["units"] == "m"
+        assert ds.attrs["planner"] == "k0"
+
+
+def test_scenarios_list_shows_every_kind():
+    result = CliRunner().invoke(app, ["scenarios", "list"])
+    assert result.exit_code == 0, result.output
+    for name in ("garcia2019-m4", "dillard-lab-tdoa", "dillard-drift-swap"):
+        assert name in result.output

@@ -91,3 +91,23 @@ def test_malformed_toml_and_missing_file(tmp_path):
         load_survey_scenario(tmp_path / "nope.toml")
     with pytest.raises(ConfigError, match="neither a scenario file nor a built-in"):
         load_survey_scenario("no-such-scenario")
+
+
+def test_loader_keeps_the_toml_text_for_the_provenance_hash(tmp_path):
+    path = tmp_path / "t.toml"
+    path.write_text(GOOD)
+    assert load_survey_scenario(path).toml_text == GOOD
+    builtin = load_survey_scenario("garcia2019-m1")
+    assert "[scenario]" in builtin.toml_text and 'name = "garcia2019-m1"' in builtin.toml_text
+
+
+def test_overrides_parse_planner_names():
+    base = load_survey_scenario("garcia2019-m4")
+    assert base.with_overrides(planner="k0").planner.kind == "random-yaw"
+    assert base.with_overrides(horizon=3).planner.horizon == 3
+    greedy = base.with_overrides(planner="greedy", epochs=7)
+    assert greedy.planner.kind == "greedy" and greedy.epochs == 7
+    with pytest.raises(ConfigError, match="unknown planner 'spiral'"):
+        base.with_overrides(planner="spiral")
+    with pytest.raises(ConfigError, match="epochs must be at least 1"):
+        base.with_overrides(epochs=0)

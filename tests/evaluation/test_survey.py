@@ -42,3 +42,43 @@ def test_summary_shapes_and_sample_run(scenario):
     assert mc.nees_final.dof == 12
     run = mc.sample_run(3)
     np.testing.assert_array_equal(run.sites_enu_m[0], mc.sites_enu_m[3])
+
+
+def test_records_and_dataset_of_a_monte_carlo(scenario):
+    import json
+
+    result = survey_monte_carlo(scenario, 5, seed=8)
+    record = result.to_record()
+    json.dumps(record, allow_nan=False)  # plain JSON, no numpy
+    assert record["planner"] == "k1" and record["planner_label"] == "k = 1"
+    assert len(record["rmsee_m"]) == 6 and len(record["rmsee_m"][0]) == 4
+    cons = record["consistency_by_epoch"]
+    assert cons["dof"] == 12 and cons["chi2_quantile"] == pytest.approx(21.026, abs=1e-3)
+    np.testing.assert_allclose(cons["mean_nees"], result.nees.mean(axis=0))
+    ds = result.to_dataset()
+    assert dict(ds.sizes) == {"epoch": 6, "transponder": 4, "run": 5}
+    assert all("units" in ds[v].attrs and "long_name" in ds[v].attrs for v in ds.data_vars)
+    np.testing.assert_array_equal(ds["nees"].values, result.nees)
+    np.testing.assert_array_equal(ds["log_det_mean"].values, result.log_det.mean)
+
+
+def test_planners_dataset_stacks_planners_per_group(scenario):
+    from oceanloc.evaluation.survey import planners_dataset
+
+    studies = [survey_monte_carlo(scenario.with_overrides(planner=p), 3, seed=8) for p in ("k0", "k1")]
+    ds = planners_dataset({"M4": studies})
+    assert list(ds["planner_M4"].values) == ["k0", "k1"]
+    assert ds["M4_rmsee"].dims == ("planner_M4", "epoch", "transponder_M4")
+    assert ds["M4_rmsee"].attrs["units"] == "m"
+
+
+def test_single_survey_record_is_plain_json():
+    import json
+
+    from oceanloc.evaluation.survey import single_survey
+
+    survey = single_survey(load_survey_scenario("garcia2018-greedy-m4").with_overrides(epochs=4), seed=1)
+    record = survey.to_record()
+    json.dumps(record, allow_nan=False)
+    assert record["planner"] == "greedy" and len(record["transponders"]) == 4
+    assert len(record["sites_enu_m"]) == 4 and record["nees_dof"] == 12

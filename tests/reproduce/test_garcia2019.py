@@ -1,3 +1,5 @@
+import json
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,7 @@ def test_estimator_study_is_consistent_and_ellipses_agree():
 
 def test_small_reproduction_has_the_issue_json_shape():
     result = garcia2019.reproduce_garcia2019(runs=6, seed=1, horizons=(0, 1))
-    record = garcia2019.to_json(result)
+    record = result.to_record()
     assert set(record["tables"]) == {"III", "V"}
     row = record["tables"]["III"][0]
     assert {"epoch", "k", "rmse_m", "logdet_mean", "logdet_std"} <= set(row)
@@ -27,8 +29,10 @@ def test_small_reproduction_has_the_issue_json_shape():
         (30, 0),
         (30, 1),
     ]
-    assert record["nees"]["M1"]["dof"] == 3 and record["nees"]["M4"]["dof"] == 12
-    assert set(record["plan_time_s"]["M4"]) == {"1"}
+    assert record["studies"]["M1"]["k0"]["nees"]["dof"] == 3
+    assert record["studies"]["M4"]["k1"]["nees"]["dof"] == 12
+    assert set(record["studies"]["M4"]) == {"k0", "k1"}
+    assert [r["planner"] for r in record["tables"]["V"][:2]] == ["k = 0 (random yaw)", "k = 1"]
     assert all({"name", "passed", "detail"} <= set(c) for c in record["checks"])
 
 
@@ -43,6 +47,17 @@ def test_fig5_and_fig53_planned_points_converge_onto_the_major_axis():
 
 def test_greedy_reproduction_json():
     result = garcia2018.reproduce_garcia2018_greedy(runs=4, seed=2)
-    record = garcia2018.to_json(result)
+    record = result.to_record()
+    json.dumps(record, allow_nan=False)  # plain JSON
     assert set(record["tables"]) == {"5.3", "5.7"}
-    assert set(record["nees"]["M4"]) == {"random", "greedy"}
+    assert set(record["studies"]["M4"]) == {"random-disk", "greedy"}
+    # One verdict per (table, planner) and one for Fig. 5.3; the record never claims success beside a
+    # verdict that does not reproduce.
+    assert [v["item"] for v in record["verdicts"]] == [
+        "Table 5.3, random disk",
+        "Table 5.3, greedy",
+        "Table 5.7, random disk",
+        "Table 5.7, greedy",
+        "Fig. 5.3, greedy point vs reach",
+    ]
+    assert record["reproduced"] == all(v["status"] != "does not reproduce" for v in record["verdicts"])

@@ -45,6 +45,9 @@ Scheduler = Annotated[
 Seed = Annotated[int | None, typer.Option("--seed", min=0, help="Master seed (same seed, same numbers).")]
 JsonOut = Annotated[Path | None, typer.Option("--json", help="Write the results as JSON to this file.")]
 FiguresOut = Annotated[Path | None, typer.Option("--figures", help="Write the figures (PNG) to this folder.")]
+NetcdfOut = Annotated[
+    Path | None, typer.Option("--netcdf", help="Write the Monte Carlo as NetCDF (CF, xarray) to this file.")
+]
 
 
 @contextmanager
@@ -148,6 +151,12 @@ def write_json(path: Path, payload: Any, provenance: records.Provenance | None =
     if provenance is None:
         provenance = cli_provenance(seed=_seed_of(payload))
     records.write_json(path, payload, provenance)
+    err_console.print(f"wrote {escape(str(path))}", highlight=False)
+
+
+def write_netcdf(path: Path, dataset: Any, provenance: records.Provenance | None = None) -> None:
+    """Write an xarray Dataset as NetCDF with the provenance of this command line; say so on stderr."""
+    records.write_netcdf(path, dataset, provenance or cli_provenance())
     err_console.print(f"wrote {escape(str(path))}", highlight=False)
 
 

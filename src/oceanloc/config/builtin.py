@@ -35,9 +35,16 @@ def resolve_scenario(name_or_path: str | Path, kind: ScenarioKind) -> tuple[Tabl
     Returns the root table and the folder of the file (``None`` for built-ins, whose data files are
     found through :func:`builtin_folder`).
     """
+    root, folder, _ = read_scenario(name_or_path, kind)
+    return root, folder
+
+
+def read_scenario(name_or_path: str | Path, kind: ScenarioKind) -> tuple[Table, Path | None, str]:
+    """:func:`resolve_scenario` plus the scenario's TOML text (for its hash in the provenance of records)."""
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
-        return read_toml(path), path.resolve().parent
+        root = read_toml(path)
+        return root, path.resolve().parent, path.read_text(encoding="utf-8")
     name = str(name_or_path)
     names = builtin_names(kind)
     if name not in names:
@@ -46,4 +53,4 @@ def resolve_scenario(name_or_path: str | Path, kind: ScenarioKind) -> tuple[Tabl
             f"(built-in: {', '.join(names)})"
         )
     text = builtin_folder(kind).joinpath(f"{name}.toml").read_text(encoding="utf-8")
-    return parse_toml(text, source=f"{name}.toml"), None
+    return parse_toml(text, source=f"{name}.toml"), None, text

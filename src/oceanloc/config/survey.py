@@ -47,9 +47,15 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.config.builtin import builtin_names, resolve_scenario
+from oceanloc.config.builtin import builtin_names, read_scenario
 from oceanloc.config.toml_fields import Table
-from oceanloc.planning.site_planners import SITE_PLANNER_KINDS, PlannerSettings
+from oceanloc.errors import ConfigError
+from oceanloc.planning.site_planners import (
+    SITE_PLANNER_KINDS,
+    PlannerSettings,
+    parse_site_planner,
+    site_planner_name,
+)
 from oceanloc.units import DEG
 
 
@@ -92,6 +98,9 @@ class SurveyScenario:
         Default number of Monte Carlo runs.
     seed : int
         Default master seed.
+    toml_text : str
+        The TOML text the scenario was read from (empty if built in code); its SHA-256 goes into the
+        provenance of every record made from the scenario.
     """
 
     name: str
@@ -109,6 +118,7 @@ class SurveyScenario:
     estimator: EstimatorSettings = dataclasses.field(default_factory=EstimatorSettings)
     runs: int = 100
     seed: int = 0
+    toml_text: str = dataclasses.field(default="", repr=False, compare=False)
 
     @property
     def n_transponders(self) -> int:
@@ -118,6 +128,29 @@ class SurveyScenario:
         """The same scenario with another planner."""
         return dataclasses.replace(self, planner=planner)
 
+    def with_overrides(
+        self, *, planner: str | None = None, horizon: int | None = None, epochs: int | None = None
+    ) -> SurveyScenario:
+        """The scenario with a planner named as :func:`parse_site_planner` reads it (``k0``, ``k2``,
+        ``greedy``, ...), another look-ahead ``horizon`` and/or another number of ``epochs``.
+
+        ``horizon`` alone changes the look-ahead of a look-ahead planner (and is kept for the others).
+        """
+        scen = self
+        if planner is not None or horizon is not None:
+            cur = self.planner
+            keep = "lookahead" if cur.kind == "lookahead" else site_planner_name(cur)
+            scen = scen.with_planner(
+                parse_site_planner(
+                    planner or keep, horizon=horizon or cur.horizon, max_distance_m=cur.max_distance_m
+                )
+            )
+        if epochs is not None:
+            if epochs < 1:
+                raise ConfigError(f"epochs must be at least 1, got {epochs}")
+            scen = dataclasses.replace(scen, epochs=epochs)
+        return scen
+
 
 def builtin_survey_scenarios() -> list[str]:
     """Names of the survey scenarios shipped with oceanloc."""
@@ -126,8 +159,8 @@ def builtin_survey_scenarios() -> list[str]:
 
 def load_survey_scenario(name_or_path: str | Path) -> SurveyScenario:
     """Load a built-in survey scenario by name or a scenario TOML file by path."""
-    root, _ = resolve_scenario(name_or_path, "survey")
-    return survey_scenario_from_table(root)
+    root, _, text = read_scenario(name_or_path, "survey")
+    return dataclasses.replace(survey_scenario_from_table(root), toml_text=text)
 
 
 def survey_scenario_from_table(root: Table) -> SurveyScenario:

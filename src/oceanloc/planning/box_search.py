@@ -170,43 +170,187 @@ def maximize_in_box(
     options : BoxSearchOptions, optional
     """
     opts = options or BoxSearchOptions()
-    lo, hi, per = _box(lower, upper, periodic)
-    d = lo.size
-    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    u_lo = np.where(per, lo, -0.5 * np.pi)
-    u_hi = np.where(per, hi, 0.5 * np.pi)
+    space = _SearchSpace.of(*_box(lower, upper, periodic))
+    fn_u = functools.partial(_objective_in_u, fn, space, batch)
+    starts = _grid_starts(fn, fn_u, space, batch, opts)
+    polished = _polish(fn_u, starts, batch, opts)
+    f = polished.f.reshape(batch, starts.count)
+    best = np.argmax(f, axis=1)
+    all_rows = np.arange(batch)
+    u_best = polished.u.reshape(batch, starts.count, space.dims)[all_rows, best]
+    return BoxMaximum(x=space.to_x(u_best), value=f[all_rows, best], evaluations=round(polished.evaluations))
 
-    any_periodic = bool(np.any(per))
 
-    def to_x(u: FloatArray) -> FloatArray:
-        if not any_periodic:
-            return mid + half * np.sin(u)
-        return np.where(per, lo + np.mod(u - lo, hi - lo), mid + half * np.sin(u))
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _SearchSpace:
+    """The box in the search variable ``u``: ``x = mid + half sin(u)`` on bounded axes, ``u`` itself
+    (wrapped) on periodic ones."""
 
-    def fn_u(u: FloatArray, rows: IntArray) -> FloatArray:
-        if batch == 1 and u.shape[0] > 1:
-            # one problem: its subproblems' candidates are one candidate set of that problem
-            return fn(to_x(u.reshape(1, -1, d)), rows[:1]).reshape(u.shape[:2])
-        return fn(to_x(u), rows)
+    lo: FloatArray
+    hi: FloatArray
+    periodic: BoolArray
+    mid: FloatArray
+    half: FloatArray
+    u_lo: FloatArray
+    u_hi: FloatArray
+    any_periodic: bool
 
-    n = opts.grid_points
-    axes, mesh, base = _u_grid(n, tuple(u_lo.tolist()), tuple(u_hi.tolist()), tuple(per.tolist()))
-    scale_min = opts.step_tol * 2.0 * np.pi / float(base.max())
+    @classmethod
+    def of(cls, lo: FloatArray, hi: FloatArray, per: BoolArray) -> _SearchSpace:
+        return cls(
+            lo=lo,
+            hi=hi,
+            periodic=per,
+            mid=0.5 * (lo + hi),
+            half=0.5 * (hi - lo),
+            u_lo=np.where(per, lo, -0.5 * np.pi),
+            u_hi=np.where(per, hi, 0.5 * np.pi),
+            any_periodic=bool(np.any(per)),
+        )
+
+    @property
+    def dims(self) -> int:
+        return int(self.lo.size)
+
+    def to_x(self, u: FloatArray) -> FloatArray:
+        if not self.any_periodic:
+            return self.mid + self.half * np.sin(u)
+        return np.where(
+            self.periodic, self.lo + np.mod(u - self.lo, self.hi - self.lo), self.mid + self.half * np.sin(u)
+        )
+
+
+def _objective_in_u(
+    fn: Objective, space: _SearchSpace, batch: int, u: FloatArray, rows: IntArray
+) -> FloatArray:
+    """``fn`` of the search variable; a single problem's subproblems are one candidate set of it."""
+    if batch == 1 and u.shape[0] > 1:
+        return fn(space.to_x(u.reshape(1, -1, space.dims)), rows[:1]).reshape(u.shape[:2])
+    return fn(space.to_x(u), rows)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _GridStarts:
+    """The grid stage's result: one polish subproblem per (problem, start).
+
+    ``u (S, d)`` and ``f (S,)`` are the starts and their values (``S = B * count``, problem-major),
+    ``rows (S,)`` their problems, ``base (d,)`` the first stencil spacing in ``u``; ``evaluations`` counts
+    the grid's objective evaluations per problem.
+    """
+
+    u: FloatArray
+    f: FloatArray
+    rows: IntArray
+    count: int
+    base: FloatArray
+    evaluations: int
+
+
+def _grid_starts(
+    fn: Objective, fn_u: Objective, space: _SearchSpace, batch: int, opts: BoxSearchOptions
+) -> _GridStarts:
+    """Stage 1: the objective on the ``u`` grid (a tensor-grid evaluation where ``fn`` offers one and no
+    axis is periodic) and the best ``opts.starts`` grid local maxima of every problem."""
+    n, d, per = opts.grid_points, space.dims, space.periodic
+    axes, mesh, base = _u_grid(n, tuple(space.u_lo.tolist()), tuple(space.u_hi.tolist()), tuple(per.tolist()))
     all_rows = np.arange(batch)
     tensor_grid = getattr(fn, "tensor_grid", None)
     values = None
     if tensor_grid is not None and not np.any(per):
-        values = tensor_grid([mid[j] + half[j] * np.sin(ax) for j, ax in enumerate(axes)], all_rows)
+        values = tensor_grid(
+            [space.mid[j] + space.half[j] * np.sin(ax) for j, ax in enumerate(axes)], all_rows
+        )
     if values is None:
         values = fn_u(np.broadcast_to(mesh, (batch, *mesh.shape)), all_rows)
     starts = _grid_local_maxima(values.reshape(batch, *([n] * d)), per, opts.starts)
-    s_count = starts.shape[1]
-    # Every (problem, start) pair is polished as its own subproblem; converged ones drop out.
-    rows = np.repeat(all_rows, s_count)
-    u = mesh[starts.reshape(-1)]
-    f = np.take_along_axis(values, starts, axis=1).reshape(-1)
-    evaluations = mesh.shape[0]
+    return _GridStarts(
+        u=mesh[starts.reshape(-1)],
+        f=np.take_along_axis(values, starts, axis=1).reshape(-1),
+        rows=np.repeat(all_rows, starts.shape[1]),
+        count=int(starts.shape[1]),
+        base=base,
+        evaluations=mesh.shape[0],
+    )
 
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _StencilModel:
+    """The local quadratic model one ``3^d`` stencil gives, for ``n`` live subproblems (stencil units).
+
+    Attributes
+    ----------
+    best_index : (n,) int
+        Stencil point with the largest value; ``best_value`` its value, ``centre_value`` the centre's.
+    step : (n, d) float
+        Newton step on the ``-|lambda|`` Hessian, before the trust region (four spacings per axis).
+    step_size : (n,) float
+        Its largest component; ``inv_clip`` the trust-region factor ``1 / max(step_size / 4, 1)``.
+    predicted_gain : (n,) float
+        The model's gain at the unclipped step; ``model_value`` the model's value at the clipped one.
+    at_max : (n,) bool
+        The Hessian is negative definite (a maximum of the model, not a saddle).
+    """
+
+    best_index: IntArray
+    best_value: FloatArray
+    centre_value: FloatArray
+    step: FloatArray
+    step_size: FloatArray
+    inv_clip: FloatArray
+    predicted_gain: FloatArray
+    model_value: FloatArray
+    at_max: BoolArray
+
+
+def _stencil_model(fs: FloatArray, weights: FloatArray, center: int, d: int, ar_n: IntArray) -> _StencilModel:
+    """Gradient and Hessian from one matrix product of the stencil values, then the ascent step."""
+    n = fs.shape[0]
+    gh = fs @ weights
+    lam, vec = np.linalg.eigh(gh[:, d:].reshape(n, d, d))
+    a_lam = np.abs(lam)
+    # eigenvalues come sorted: the largest magnitude is at one end
+    floor = 1e-9 * np.maximum(a_lam[:, :1], a_lam[:, -1:]) + 1e-300
+    curvature = np.maximum(a_lam, floor)
+    g_eig = (gh[:, None, :d] @ vec)[:, 0]  # V^T g
+    s_eig = g_eig / curvature  # V^T step, before the trust region
+    predicted_gain = 0.5 * np.add.reduce(g_eig * s_eig, axis=1)
+    step = (vec @ s_eig[:, :, None])[:, :, 0]
+    a_step = np.maximum.reduce(np.abs(step), axis=1)
+    clip = np.maximum(0.25 * a_step, 1.0)
+    inv_clip = 1.0 / clip
+    # the model's value at the clipped step: f0 + (2/c - 1/c^2) predicted_gain
+    j_best = fs.argmax(axis=1)
+    f0 = fs[:, center]
+    return _StencilModel(
+        best_index=j_best,
+        best_value=fs[ar_n, j_best],
+        centre_value=f0,
+        step=step,
+        step_size=a_step,
+        inv_clip=inv_clip,
+        predicted_gain=predicted_gain,
+        model_value=f0 + predicted_gain * inv_clip * (2.0 - inv_clip),
+        at_max=lam[:, -1] < 0.0,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _Polished:
+    """The polish stage's result: the best point ``u (S, d)`` and value ``f (S,)`` of every subproblem,
+    and the evaluations per problem so far (grid included)."""
+
+    u: FloatArray
+    f: FloatArray
+    evaluations: float
+
+
+def _polish(fn_u: Objective, starts: _GridStarts, batch: int, opts: BoxSearchOptions) -> _Polished:
+    """Stage 2: finite-difference Newton from every start (see the module docstring), then the last
+    candidate of every subproblem still live after ``opts.max_iterations``."""
+    u, f, rows, base = starts.u.copy(), starts.f.copy(), starts.rows, starts.base
+    d = base.size
+    scale_min = opts.step_tol * 2.0 * np.pi / float(base.max())
+    evaluations: float = starts.evaluations
     stencil, center, weights = _stencil(d)
     # The stencil of each iteration is centred on a candidate: the Newton point of the previous model,
     # evaluated lazily as the centre of the next stencil (one objective call per iteration), or the best
@@ -228,50 +372,32 @@ def maximize_in_box(
         pts = lc[:, None, :] + stencil * hl[:, None, :]
         fs = fn_u(pts, lr)
         evaluations += len(stencil) * n / batch
-        gh = fs @ weights
-        lam, vec = np.linalg.eigh(gh[:, d:].reshape(n, d, d))
-        a_lam = np.abs(lam)
-        # eigenvalues come sorted: the largest magnitude is at one end
-        floor = 1e-9 * np.maximum(a_lam[:, :1], a_lam[:, -1:]) + 1e-300
-        curvature = np.maximum(a_lam, floor)
-        g_eig = (gh[:, None, :d] @ vec)[:, 0]  # V^T g
-        s_eig = g_eig / curvature  # V^T step, before the trust region
-        predicted_gain = 0.5 * np.add.reduce(g_eig * s_eig, axis=1)
-        step = (vec @ s_eig[:, :, None])[:, :, 0]
-        a_step = np.maximum.reduce(np.abs(step), axis=1)
-        clip = np.maximum(0.25 * a_step, 1.0)
-        inv_clip = 1.0 / clip
-        # the model's value at the clipped step: f0 + (2/c - 1/c^2) predicted_gain
         ar_n = ar[:n]
-        j_best = fs.argmax(axis=1)
-        f_sten = fs[ar_n, j_best]
-        f0 = fs[:, center]
-        f_model = f0 + predicted_gain * inv_clip * (2.0 - inv_clip)
-        improved = f_sten > lf
+        model = _stencil_model(fs, weights, center, d, ar_n)
+        improved = model.best_value > lf
         # Centred on the best point so far, or a better stencil point that the model's Newton point
         # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
         # point: move there at the same spacing. Neither: back to the best point, four times finer.
-        centre_best = (j_best == center) & (f0 >= lf)
-        newton = centre_best | (improved & (f_model > f_sten))
-        lu = np.where(improved[:, None], pts[ar_n, j_best], lu)
-        lf = np.where(improved, f_sten, lf)
+        centre_best = (model.best_index == center) & (model.centre_value >= lf)
+        newton = centre_best | (improved & (model.model_value > model.best_value))
+        lu = np.where(improved[:, None], pts[ar_n, model.best_index], lu)
+        lf = np.where(improved, model.best_value, lf)
         s_now = ls
-        at_max = lam[:, -1] < 0.0
         # The next spacing follows the step, but shrinks at most 128-fold: a vanishing step on a coarse
         # stencil (on a bound x = c + r sin(u) is stationary in u whatever the objective does nearby)
         # is checked on a stencil fine enough to stop on (below 1e-2), which sees the way up to any
         # maximum lying farther inside than its spacing.
-        step_scale = np.minimum(np.maximum(2.0 * a_step * inv_clip, _MAX_SHRINK), 1.0) * s_now
-        lc = np.where(newton[:, None], lc + step * (inv_clip[:, None] * hl), lu)
+        step_scale = np.minimum(np.maximum(2.0 * model.step_size * model.inv_clip, _MAX_SHRINK), 1.0) * s_now
+        lc = np.where(newton[:, None], lc + model.step * (model.inv_clip[:, None] * hl), lu)
         ls = np.where(newton, step_scale, np.where(improved, s_now, 0.25 * s_now))
         # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
         # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
         # a flat direction would let the point itself keep moving.
         flat = (
             centre_best
-            & at_max
+            & model.at_max
             & (s_now < 1e-2)
-            & (predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
+            & (model.predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
         )
         keep = (ls > scale_min) & ~flat
         if not keep.all():
@@ -289,11 +415,7 @@ def maximize_in_box(
         better = f_cand > f[pending]
         u[pending[better]] = lc[better]
         f[pending[better]] = f_cand[better]
-
-    f = f.reshape(batch, s_count)
-    best = np.argmax(f, axis=1)
-    u_best = u.reshape(batch, s_count, d)[all_rows, best]
-    return BoxMaximum(x=to_x(u_best), value=f[all_rows, best], evaluations=round(evaluations))
+    return _Polished(u=u, f=f, evaluations=evaluations)
 
 
 _MAX_SHRINK = 1.0 / 128.0

@@ -24,12 +24,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import FloatArray
-from oceanloc.config.survey import PlannerSettings, SurveyScenario, load_survey_scenario
+from oceanloc.config.survey import SurveyScenario, load_survey_scenario
 from oceanloc.estimation.consistency import (
     ChiSquareCheck,
     ConfidenceEllipse,
@@ -42,15 +43,16 @@ from oceanloc.estimation.map_gauss_newton import GaussianPrior, RangeProblem, so
 from oceanloc.evaluation.survey import SurveyMonteCarlo, survey_monte_carlo
 from oceanloc.models.measurements import range_m
 from oceanloc.planning.measurement_sites import LookaheadPlanner
+from oceanloc.planning.site_planners import PlannerSettings, site_planner_name
 from oceanloc.reproduce.survey_tables import (
     Check,
     MajorAxisSweep,
     TableRow,
+    Verdict,
     major_axis_sweep,
     nees_checks,
-    nees_json,
-    rows_json,
     table_rows,
+    table_verdicts,
 )
 from oceanloc.units import DEG
 
@@ -78,6 +80,10 @@ PAPER_PLAN_TIME_S: dict[str, dict[int, float]] = {
     "M4": {1: 0.24, 2: 0.72, 3: 1.62},
 }
 TABLE_SCENARIOS: dict[str, str] = {"III": "garcia2019-m1", "V": "garcia2019-m4"}
+TABLE_TITLES: dict[str, str] = {
+    "III": "Table III: one transponder (M = 1)",
+    "V": "Table V: four transponders (M = 4), RMSEE of m = 2",
+}
 TABLE_RMSE_TRANSPONDER: dict[str, int] = {"III": 0, "V": 1}
 NEES_FIGURE_HORIZON = 2
 """Figs. 4 and 7 show the NEES of the k = 2 planner."""
@@ -112,6 +118,22 @@ class EstimatorStudy:
     actual_ellipse: ConfidenceEllipse
     sample_ellipse: ConfidenceEllipse
 
+    def to_record(self) -> dict[str, Any]:
+        return {
+            "runs": int(self.nees.size),
+            "nees_mean": self.check.mean,
+            "nees_dof": self.check.dof,
+            "nees_p_value": self.check.p_value,
+            "actual_ellipse_axes_m": [
+                float(self.actual_ellipse.semi_major_m),
+                float(self.actual_ellipse.semi_minor_m),
+            ],
+            "sample_ellipse_axes_m": [
+                float(self.sample_ellipse.semi_major_m),
+                float(self.sample_ellipse.semi_minor_m),
+            ],
+        }
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Garcia2019Result:
@@ -124,6 +146,26 @@ class Garcia2019Result:
     studies: dict[str, dict[int, SurveyMonteCarlo]]
     tables: dict[str, list[TableRow]]
     checks: list[Check]
+    verdicts: list[Verdict]
+
+    def to_record(self) -> dict[str, Any]:
+        """The machine-readable record of a reproduction (``--json``)."""
+        return {
+            "runs": self.runs,
+            "seed": self.seed,
+            "verdicts": [v.to_record() for v in self.verdicts],
+            "tables": {name: [r.to_record() for r in rows] for name, rows in self.tables.items()},
+            "studies": {
+                label: {site_planner_name(s.scenario.planner): s.to_record() for _, s in sorted(by_k.items())}
+                for label, by_k in self.studies.items()
+            },
+            "paper_plan_time_s": {
+                m: {f"k{k}": v for k, v in d.items()} for m, d in PAPER_PLAN_TIME_S.items()
+            },
+            "estimator": self.estimator.to_record(),
+            "fig5_major_axis_angle_deg": {f"{r:g}": a for r, a in self.fig5.angle_at().items()},
+            "checks": [c.to_record() for c in self.checks],
+        }
 
 
 def estimator_study(runs: int = ESTIMATOR_RUNS, seed: int = 0) -> EstimatorStudy:
@@ -247,46 +289,5 @@ def reproduce_garcia2019(
         studies=studies,
         tables=tables,
         checks=acceptance_checks(tables, studies),
+        verdicts=table_verdicts(tables),
     )
-
-
-def to_json(result: Garcia2019Result) -> dict[str, object]:
-    """The machine-readable record of a reproduction (``--json``)."""
-    nees_record: dict[str, object] = {}
-    plan_json: dict[str, dict[str, float]] = {}
-    for label, by_k in result.studies.items():
-        k_head = NEES_FIGURE_HORIZON if NEES_FIGURE_HORIZON in by_k else min(by_k)
-        nees_record[label] = {
-            **nees_json(by_k[k_head]),
-            "k": k_head,
-            "by_k": {str(k): nees_json(s) for k, s in sorted(by_k.items())},
-        }
-        plan_json[label] = {str(k): s.plan_time_s for k, s in sorted(by_k.items()) if k >= 1}
-    est = result.estimator
-    return {
-        "runs": result.runs,
-        "seed": result.seed,
-        "tables": {name: rows_json(rows) for name, rows in result.tables.items()},
-        "nees": nees_record,
-        "plan_time_s": plan_json,
-        "paper_plan_time_s": {m: {str(k): v for k, v in d.items()} for m, d in PAPER_PLAN_TIME_S.items()},
-        "estimator": {
-            "runs": int(est.nees.size),
-            "nees_mean": est.check.mean,
-            "nees_p_value": est.check.p_value,
-            "actual_ellipse_axes_m": [
-                float(est.actual_ellipse.semi_major_m),
-                float(est.actual_ellipse.semi_minor_m),
-            ],
-            "sample_ellipse_axes_m": [
-                float(est.sample_ellipse.semi_major_m),
-                float(est.sample_ellipse.semi_minor_m),
-            ],
-        },
-        "fig5_major_axis_angle_deg": {
-            str(int(r)): float(a)
-            for r, a in zip(result.fig5.reaches_m, result.fig5.angle_deg, strict=True)
-            if r in (5, 10, 20, 40, 80)
-        },
-        "checks": [{"name": c.name, "passed": c.passed, "detail": c.detail} for c in result.checks],
-    }
