@@ -173,6 +173,7 @@ def localize_log_files(
 ) -> LogLocalization:
     """Locate every beacon of a GPS + range log pair (:func:`oceanloc.estimation.range_logs.
     localize_beacons`); with ``truth`` (a ``truth.json`` of ``simulate logs``) each error is measured."""
+    known = None if truth is None else read_truth(truth)  # a bad truth file fails before the work
     logs = read_log_pair(gps, ranges, origin=origin, sound_speed_mps=sound_speed_mps, max_gap_s=max_gap_s)
     estimates = localize_beacons(
         logs.aligned,
@@ -182,7 +183,7 @@ def localize_log_files(
     )
     pos = np.array([e.position_enu_m for e in estimates]).reshape(-1, 3)
     geo = enu_to_geodetic(pos, logs.origin).reshape(-1, 3)
-    truth_enu = None if truth is None else read_truth(truth).enu_in(logs.origin)
+    truth_enu = None if known is None else known.enu_in(logs.origin)
     return LogLocalization(
         logs=logs,
         estimates=tuple(estimates),

@@ -32,7 +32,7 @@ from oceanloc.field.replay_records import gnssa_replay_records, log_reference, r
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.gnssa import GnssaSurvey, read_gnssa, survey_sound_speeds_mps
 from oceanloc.io.usbl import AlignedRanges
-from oceanloc.sim.logs import PIER_ORIGIN, read_truth
+from oceanloc.sim.logs import PIER_ORIGIN, BeaconTruth, read_truth
 from oceanloc.units import DEG
 
 TABULATED_EPOCHS: tuple[int, ...] = (3, 7, 30)
@@ -675,13 +675,16 @@ def replay_gnssa_files(
     )  # fmt: skip
 
 
-LogTruth = str | Path | Mapping[int, Sequence[float]]
+LogTruth = str | Path | BeaconTruth | Mapping[int, Sequence[float]]
 """What ``replay logs`` measures errors against: ``"journal"`` (the journal's beacons, moved from its
 frame), ``"estimate"`` (the robust estimate over every range), a ``truth.json`` path of ``simulate
 logs``, or ``{beacon: (E, N, U)}`` in the frame of the origin used."""
 
 
 def _resolve_truth(truth: LogTruth, origin: EnuOrigin) -> tuple[dict[int, list[float]] | None, str]:
+    if isinstance(truth, BeaconTruth):
+        enu = truth.enu_in(origin)
+        return {b: list(map(float, v)) for b, v in enu.items()}, f"file {Path(truth.path or 'truth').name}"
     if isinstance(truth, Mapping):
         return {int(b): list(map(float, v)) for b, v in truth.items()}, "given"
     if str(truth).lower() == "journal":
@@ -689,8 +692,7 @@ def _resolve_truth(truth: LogTruth, origin: EnuOrigin) -> tuple[dict[int, list[f
         return {b + 1: list(map(float, v)) for b, v in enumerate(moved)}, "journal"
     if str(truth).lower() == "estimate":
         return None, "estimate"
-    enu = read_truth(truth).enu_in(origin)
-    return {b: list(map(float, v)) for b, v in enu.items()}, f"file {Path(truth).name}"
+    raise ConfigError(f"truth {truth!r}: expected journal, estimate, a truth file or positions per beacon")
 
 
 def replay_log_files(
@@ -721,6 +723,8 @@ def replay_log_files(
     """
     if sigma_range_m <= 0 or speed_mps <= 0 or reach_m <= 0:
         raise ConfigError("--sigma-range, --speed and --reach must be positive")
+    if isinstance(truth, str | Path) and str(truth).lower() not in ("journal", "estimate"):
+        truth = read_truth(truth)  # a bad truth file fails before the work
     logs = read_log_pair(gps, ranges, origin=origin, sound_speed_mps=sound_speed_mps, max_gap_s=max_gap_s)
     truth_enu, source = _resolve_truth(truth, logs.origin)
     settings = log_replay_settings(
@@ -732,7 +736,7 @@ def replay_log_files(
         logs.aligned, truth_enu_m=truth_enu, tables=tables, runs=runs, seed=seed, planners=planners,
         settings=settings, sigma_range_m=sigma_range_m, executor=executor, progress=progress,
     )  # fmt: skip
-    inputs = (*logs.inputs, *([str(truth)] if source.startswith("file") else []))
+    inputs = (*logs.inputs, *([truth.path] if isinstance(truth, BeaconTruth) and truth.path else []))
     return dataclasses.replace(
         result, truth_source=source, logs=logs, runs=runs, seed=seed, planners=tuple(planners), inputs=inputs
     )

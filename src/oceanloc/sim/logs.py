@@ -78,6 +78,8 @@ class BeaconTruth:
     simulation_origin : EnuOrigin or None
         The frame the simulation was set up in (the journal's pier origin).
     seed : int or None
+    path : str or None
+        The file it was read from.
     """
 
     beacons: tuple[int, ...]
@@ -86,6 +88,7 @@ class BeaconTruth:
     geodetic: FloatArray
     simulation_origin: EnuOrigin | None = None
     seed: int | None = None
+    path: str | None = None
 
     def enu_in(self, origin: EnuOrigin) -> dict[int, FloatArray]:
         """The positions in the ENU frame of ``origin``, per beacon id, metres."""
@@ -149,7 +152,7 @@ def read_truth(path: str | Path) -> BeaconTruth:
     seed = data.get("seed")
     return BeaconTruth(
         beacons=beacons, origin=origin, enu_m=enu, geodetic=geo, simulation_origin=sim,
-        seed=seed if isinstance(seed, int) else None,
+        seed=seed if isinstance(seed, int) else None, path=str(p),
     )  # fmt: skip
 
 
