@@ -64,7 +64,7 @@ def test_start_add_status_next_export(tmp_path: Path, monkeypatch):
         assert j.fixes().shape[0] == n_fix and j.ranges().shape[0] == n_rng
 
     out = _invoke(["survey", "status", journal, "--json", "st.json"])
-    assert f"{n_fix} fixes" in out and "Beacons (ENU from" in out
+    assert f"{n_fix} fixes" in out and "Beacons, ENU from" in out and "(earliest fix)" in out
     status = json.loads(Path("st.json").read_text())
     assert status["provenance"]["inputs"][0]["path"] == journal and status["fixes"] == n_fix
     assert [b["beacon"] for b in status["beacons"]] == [1, 2]

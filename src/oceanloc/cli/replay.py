@@ -133,7 +133,9 @@ def gnssa_command(
     help="Reproduce journal Tables VII (M = 1, beacon 1) and IX (M = 2) on a GPS + USBL log pair, with the "
     "paper's values (and the thesis' Tables 6.2 and 6.6 for greedy and random disk) beside ours.\n\n"
     + _READINGS
-    + "\n\nLogs: p_V(1) = [8.62, -6.77, 0] m, phi(1) = 13 deg, 3 m/s, T = 1 s, w_max = 30 deg/s, "
+    + "\n\nLogs: p_V(1) = [8.62, -6.77, 0] m in the journal's frame (moved to the frame of --origin), "
+    "phi(1) = 13 deg counter-clockwise from east (a heading of 77 deg clockwise from north), 3 m/s, "
+    "T = 1 s, w_max = 30 deg/s, "
     "d_max = 10 m, sigma_eps = 1.006 m; a record of Table IX is one range to each beacon within 3 s; "
     "ranges the robust estimator rejects as outliers are left out.",
 )

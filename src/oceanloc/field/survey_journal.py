@@ -35,7 +35,7 @@ from oceanloc.io.nmea import read_nmea
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges, align_ranges, format_utc, read_usbl
 from oceanloc.planning.measurement_sites import PlanningState
-from oceanloc.planning.site_planners import make_site_planner
+from oceanloc.planning.site_planners import make_site_planner, site_planner_name
 from oceanloc.planning.status import PlanStatus
 
 MIN_RANGES = 4
@@ -168,7 +168,7 @@ class Waypoint:
     Attributes
     ----------
     planner : str
-        Planner kind.
+        Planner name (:func:`~oceanloc.planning.site_planners.site_planner_name`: k0, k2, greedy, ...).
     from_t_unix_s : float
         Time of the last fix, the planning start.
     from_enu_m : (3,) float
@@ -195,6 +195,8 @@ class Waypoint:
     beacons : (M,) int
         The beacons planned for.
     status : PlanStatus
+    origin : EnuOrigin or None
+        The ENU frame of the positions above (the estimates').
     """
 
     planner: str
@@ -213,6 +215,7 @@ class Waypoint:
     objective_nats: float
     beacons: IntArray
     status: PlanStatus
+    origin: EnuOrigin | None = None
 
     @property
     def from_heading_deg(self) -> float | None:
@@ -253,6 +256,9 @@ class Waypoint:
             "objective_nats": self.objective_nats,
             "beacons": self.beacons.tolist(),
             "status": self.status.value,
+            "origin": None
+            if self.origin is None
+            else {"lat_deg": self.origin.lat_deg, "lon_deg": self.origin.lon_deg, "h_m": self.origin.h_m},
         }
 
 
@@ -406,7 +412,7 @@ def next_waypoint(
     nxt = plan.next_pos_enu_m[0]
     step = nxt - start
     return Waypoint(
-        planner=kind,
+        planner=site_planner_name(settings.planner),
         from_t_unix_s=float(records.fix_t_unix_s[-1]),
         from_enu_m=start.copy(),
         yaw_rad=float(yaw),
@@ -422,6 +428,7 @@ def next_waypoint(
         objective_nats=float(plan.objective[0]),
         beacons=est.beacons.copy(),
         status=plan.status,
+        origin=est.origin,
     )
 
 

@@ -1,5 +1,6 @@
 import dataclasses
 
+import numpy as np
 import pytest
 from rich.console import Console
 
@@ -48,3 +49,23 @@ def test_spread_table_has_units_targets_and_the_velocity_line(two_surveys):
     lines = tables.gnssa_spread_lines(two_surveys)
     assert lines[0] == "site velocity (auto): header Lat0 32.8668, Lon0 -117.2701 is on PCFC"
     assert lines[1].startswith("as surveyed (no site velocity): std E/N/U")
+
+
+def test_log_tables_fit_100_columns_with_units_and_the_origin(tmp_path):
+    from oceanloc.field.range_logs import localize_log_files, range_noise_files
+    from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
+
+    logs = simulate_pier_logs(tmp_path, PierLogSettings(duration_s=600.0), np.random.default_rng(5), seed=5)
+    loc = localize_log_files(logs.nmea_path, logs.ranges_path, truth=logs.truth_path)
+    text = _render(tables.beacons_table(loc))
+    assert "ENU from" in text and "(earliest fix)" in text
+    for header in ("E m", "N m", "U m", "1σ E/N/U m", "lat deg", "lon deg", "RMS m", "error m"):
+        assert header in text
+    assert all(len(line) <= 100 for line in text.splitlines()) and "…" not in text
+    truth = _render(tables.truth_table(logs.truth))
+    assert "True beacons, ENU from" in " ".join(truth.split()) and "h m" in truth
+    noise = range_noise_files(logs.nmea_path, logs.ranges_path)
+    text = _render(tables.range_noise_table(noise))
+    for header in ("segment s", "range m", "σ mm", "± mm"):
+        assert header in text
+    assert "use it as --sigma-range" in tables.range_noise_line(noise)

@@ -23,7 +23,7 @@ from oceanloc.field.survey_journal import MIN_RANGES, RANGE_STATUS, JournalStatu
 from oceanloc.geo.enu import EnuOrigin
 from oceanloc.geo.plate_motion import SECONDS_PER_YEAR
 from oceanloc.io.usbl import format_utc
-from oceanloc.planning.site_planners import site_planner_label
+from oceanloc.planning.site_planners import parse_site_planner, site_planner_label
 from oceanloc.sim.logs import BeaconTruth
 from oceanloc.units import DEG
 
@@ -262,7 +262,8 @@ def journal_status_lines(st: JournalStatus) -> list[str]:
 def journal_estimates_table(est: SurveyEstimates, origin_source: str = "") -> Table:
     """``survey status``: per beacon the estimate (ENU and latitude/longitude), 1-sigma, 95 % ellipse
     semi-axes and the major axis' azimuth (clockwise from north), ranges used and excluded."""
-    table = _table(f"Beacons (ENU from {origin_text(est.origin, origin_source)})")
+    table = _table(f"Beacons, ENU from {origin_text(est.origin, origin_source)}")
+    table.caption = "95% a/b: ellipse semi-axes; az: its major axis, clockwise from true north"
     cols = ("beacon", "E m", "N m", "U m", "lat deg", "lon deg", "1σ E/N/U m", "95% a/b m", "az deg")
     cols = (*cols, "used/excl")
     for col in cols:
@@ -295,7 +296,11 @@ def journal_range_lines(est: SurveyEstimates) -> list[str]:
 def waypoint_table(w: Waypoint) -> Table:
     """``survey next``: the start and every planned site, ENU and latitude/longitude, with the heading of
     each leg (degrees clockwise from true north)."""
-    table = _table(f"Next waypoint ({w.planner}, from the fix of {format_utc(w.from_t_unix_s)})")
+    label = site_planner_label(parse_site_planner(w.planner))
+    title = f"Next waypoint ({label}, from the fix of {format_utc(w.from_t_unix_s)})"
+    if w.origin is not None:
+        title += f", ENU from {origin_text(w.origin)}"
+    table = _table(title)
     for col in ("site", "E m", "N m", "U m", "lat deg", "lon deg", "heading deg"):
         table.add_column(col, justify="right")
     e, n, u = w.from_enu_m
