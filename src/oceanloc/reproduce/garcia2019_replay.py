@@ -18,9 +18,9 @@ from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from oceanloc._typing import FloatArray
 from oceanloc.errors import ConfigError
@@ -34,6 +34,9 @@ from oceanloc.io.gnssa import GnssaSurvey, read_gnssa, survey_sound_speeds_mps
 from oceanloc.io.usbl import AlignedRanges
 from oceanloc.sim.logs import PIER_ORIGIN, BeaconTruth, read_truth
 from oceanloc.units import DEG
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 TABULATED_EPOCHS: tuple[int, ...] = (3, 7, 30)
 PAPER_RUNS = 100
@@ -515,6 +518,8 @@ def experiment_dataset(exp: ReplayExperiment) -> xr.Dataset:
     ``transponder`` (the record set's transponders, 1-based), ``axis`` (E, N, U). Planning quantities
     defined between epochs (snap distance) are NaN at epoch 1.
     """
+    import xarray as xr  # imported on use: the command line starts without xarray
+
     names = list(exp.studies)
     hist = [exp.studies[n].histories for n in names]
     runs = hist[0].run_indices
@@ -591,6 +596,8 @@ def experiment_dataset(exp: ReplayExperiment) -> xr.Dataset:
 def replays_dataset(experiments: Mapping[str, ReplayExperiment]) -> xr.Dataset:
     """Several replayed record sets in one Dataset, along ``experiment`` (Table VII/IX, or the surveys);
     transponders a record set does not have are NaN."""
+    import xarray as xr
+
     parts = [exp.to_dataset().expand_dims(experiment=[label]) for label, exp in experiments.items()]
     ds = xr.concat(parts, dim="experiment", join="outer", combine_attrs="override")
     ds["experiment"].attrs["long_name"] = "replayed record set"
