@@ -1,5 +1,6 @@
 import json
 
+import pytest
 from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
@@ -81,18 +82,22 @@ def _oceanloc(*args):
     )
 
 
-def test_usage_errors_of_the_survey_commands_exit_2_with_one_line():
-    for args, reason in (
+@pytest.mark.parametrize(
+    ("args", "reason"),
+    [
         (
             ("simulate", "survey", "--scenario", "garcia2019-m1", "--planner", "best"),
             "unknown planner 'best'",
         ),
         (("scenarios", "show", "nope"), "'nope' is neither a scenario file nor a built-in scenario"),
         (("reproduce", "garcia2019", "--horizons", "0,x"), "--horizons must be comma-separated integers"),
-    ):
-        proc = _oceanloc(*args)
-        assert proc.returncode == 2, proc.stderr
-        assert reason in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+    ],
+)
+def test_usage_errors_of_the_survey_commands_exit_2_with_one_line(args, reason):
+    proc = _oceanloc(*args)
+    assert proc.returncode == 2, proc.stderr
+    assert reason in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+    assert proc.stderr.count("error:") == 1 and proc.stderr.startswith("error:")  # one reason
 
 
 def test_simulate_survey_netcdf_and_json_carry_the_scenario_hash(tmp_path):
@@ -133,3 +138,26 @@ def test_scenarios_list_shows_every_kind():
     assert result.exit_code == 0, result.output
     for name in ("garcia2019-m4", "dillard-lab-tdoa", "dillard-drift-swap"):
         assert name in result.output
+
+
+def test_reproduce_garcia2018_prints_what_does_not_reproduce(tmp_path):
+    args = [
+        "reproduce",
+        "garcia2018-greedy",
+        "--runs",
+        "3",
+        "--workers",
+        "1",
+        "--json",
+        str(tmp_path / "g.json"),
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "Which thesis tables and figures reproduce" in result.output
+    assert "works" not in result.output
+    record = json.loads((tmp_path / "g.json").read_text())
+    missing = [v["item"] for v in record["verdicts"] if v["status"] == "does not reproduce"]
+    assert record["reproduced"] is (not missing)
+    if missing:
+        assert "Does not reproduce:" in result.output
+    assert record["provenance"]["scenario"] == "garcia2018-greedy-m1 + garcia2018-greedy-m4"

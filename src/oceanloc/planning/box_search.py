@@ -344,10 +344,74 @@ class _Polished:
     evaluations: float
 
 
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _Live:
+    """The live subproblems of the polish, compacted: ``index`` their position in the stage's arrays,
+    ``u`` and ``f`` their best point and value, ``candidate`` the next stencil centre, ``spacing`` the
+    stencil spacing in units of ``base``, ``rows`` their problems."""
+
+    index: IntArray
+    u: FloatArray
+    f: FloatArray
+    candidate: FloatArray
+    spacing: FloatArray
+    rows: IntArray
+
+    def take(self, keep: BoolArray) -> _Live:
+        return _Live(
+            index=self.index[keep],
+            u=self.u[keep],
+            f=self.f[keep],
+            candidate=self.candidate[keep],
+            spacing=self.spacing[keep],
+            rows=self.rows[keep],
+        )
+
+
+def _advance(
+    live: _Live,
+    model: _StencilModel,
+    pts: FloatArray,
+    hl: FloatArray,
+    ar_n: IntArray,
+    center: int,
+    value_tol: float,
+) -> tuple[_Live, BoolArray]:
+    """One polish step from the stencil's model: the new best points, the next stencil centres and
+    spacings, and which subproblems converged in value."""
+    lu, lf, lc, ls = live.u, live.f, live.candidate, live.spacing
+    improved = model.best_value > lf
+    # Centred on the best point so far, or a better stencil point that the model's Newton point
+    # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
+    # point: move there at the same spacing. Neither: back to the best point, four times finer.
+    centre_best = (model.best_index == center) & (model.centre_value >= lf)
+    newton = centre_best | (improved & (model.model_value > model.best_value))
+    lu = np.where(improved[:, None], pts[ar_n, model.best_index], lu)
+    lf = np.where(improved, model.best_value, lf)
+    s_now = ls
+    # The next spacing follows the step, but shrinks at most 128-fold: a vanishing step on a coarse
+    # stencil (on a bound x = c + r sin(u) is stationary in u whatever the objective does nearby)
+    # is checked on a stencil fine enough to stop on (below 1e-2), which sees the way up to any
+    # maximum lying farther inside than its spacing.
+    step_scale = np.minimum(np.maximum(2.0 * model.step_size * model.inv_clip, _MAX_SHRINK), 1.0) * s_now
+    lc = np.where(newton[:, None], lc + model.step * (model.inv_clip[:, None] * hl), lu)
+    ls = np.where(newton, step_scale, np.where(improved, s_now, 0.25 * s_now))
+    # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
+    # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
+    # a flat direction would let the point itself keep moving.
+    flat = (
+        centre_best
+        & model.at_max
+        & (s_now < 1e-2)
+        & (model.predicted_gain <= value_tol * np.maximum(1.0, np.abs(lf)))
+    )
+    return _Live(index=live.index, u=lu, f=lf, candidate=lc, spacing=ls, rows=live.rows), flat
+
+
 def _polish(fn_u: Objective, starts: _GridStarts, batch: int, opts: BoxSearchOptions) -> _Polished:
     """Stage 2: finite-difference Newton from every start (see the module docstring), then the last
     candidate of every subproblem still live after ``opts.max_iterations``."""
-    u, f, rows, base = starts.u.copy(), starts.f.copy(), starts.rows, starts.base
+    u, f, base = starts.u.copy(), starts.f.copy(), starts.base
     d = base.size
     scale_min = opts.step_tol * 2.0 * np.pi / float(base.max())
     evaluations: float = starts.evaluations
@@ -357,59 +421,46 @@ def _polish(fn_u: Objective, starts: _GridStarts, batch: int, opts: BoxSearchOpt
     # point so far after a failed candidate. ``u`` and ``f`` hold the best point seen, so the search is
     # monotone whatever the candidate does. The local model is built in stencil units
     # ``z = (u - centre) / (s base)``: one matrix product gives its gradient and Hessian, and the trust
-    # region is four spacings per axis.
-    # The live subproblems' state is kept compacted: ``lu``, ``lf`` best point and value, ``lc``
-    # candidate, ``ls`` stencil spacing in units of ``base``, ``lr`` problem row, ``lidx`` position in
-    # ``u``/``f``; retiring ones are written back.
-    lidx = np.arange(u.shape[0])
-    lu, lf, lc, ls, lr = u.copy(), f.copy(), u.copy(), np.ones(u.shape[0]), rows.copy()
-    ar = np.arange(lidx.size)
+    # region is four spacings per axis. Retiring subproblems are written back to ``u`` and ``f``.
+    live = _Live(
+        index=np.arange(u.shape[0]),
+        u=u.copy(),
+        f=f.copy(),
+        candidate=u.copy(),
+        spacing=np.ones(u.shape[0]),
+        rows=starts.rows.copy(),
+    )
+    ar = np.arange(u.shape[0])
     for _ in range(opts.max_iterations):
-        n = lidx.size
+        n = live.index.size
         if n == 0:
             break
-        hl = ls[:, None] * base
-        pts = lc[:, None, :] + stencil * hl[:, None, :]
-        fs = fn_u(pts, lr)
+        hl = live.spacing[:, None] * base
+        pts = live.candidate[:, None, :] + stencil * hl[:, None, :]
+        fs = fn_u(pts, live.rows)
         evaluations += len(stencil) * n / batch
         ar_n = ar[:n]
-        model = _stencil_model(fs, weights, center, d, ar_n)
-        improved = model.best_value > lf
-        # Centred on the best point so far, or a better stencil point that the model's Newton point
-        # promises to beat: go to the Newton point, spacing from the step. Otherwise a better stencil
-        # point: move there at the same spacing. Neither: back to the best point, four times finer.
-        centre_best = (model.best_index == center) & (model.centre_value >= lf)
-        newton = centre_best | (improved & (model.model_value > model.best_value))
-        lu = np.where(improved[:, None], pts[ar_n, model.best_index], lu)
-        lf = np.where(improved, model.best_value, lf)
-        s_now = ls
-        # The next spacing follows the step, but shrinks at most 128-fold: a vanishing step on a coarse
-        # stencil (on a bound x = c + r sin(u) is stationary in u whatever the objective does nearby)
-        # is checked on a stencil fine enough to stop on (below 1e-2), which sees the way up to any
-        # maximum lying farther inside than its spacing.
-        step_scale = np.minimum(np.maximum(2.0 * model.step_size * model.inv_clip, _MAX_SHRINK), 1.0) * s_now
-        lc = np.where(newton[:, None], lc + model.step * (model.inv_clip[:, None] * hl), lu)
-        ls = np.where(newton, step_scale, np.where(improved, s_now, 0.25 * s_now))
-        # Converged in value: centred on the best point, on a fine stencil (where the quadratic model is
-        # accurate), at a maximum of the model that promises less than value_tol (relative) more, even if
-        # a flat direction would let the point itself keep moving.
-        flat = (
-            centre_best
-            & model.at_max
-            & (s_now < 1e-2)
-            & (model.predicted_gain <= opts.value_tol * np.maximum(1.0, np.abs(lf)))
+        live, flat = _advance(
+            live, _stencil_model(fs, weights, center, d, ar_n), pts, hl, ar_n, center, opts.value_tol
         )
-        keep = (ls > scale_min) & ~flat
+        keep = (live.spacing > scale_min) & ~flat
         if not keep.all():
             done = ~keep
-            u[lidx[done]], f[lidx[done]] = lu[done], lf[done]
-            lidx, lu, lf, lc, ls, lr = lidx[keep], lu[keep], lf[keep], lc[keep], ls[keep], lr[keep]
-    u[lidx], f[lidx] = lu, lf
-    # Subproblems that retired converged (in value, or in spacing), so their last Newton candidate
-    # promises nothing worth a call; those still live after max_iterations get theirs evaluated.
-    moved = np.any(lc != lu, axis=-1)
+            u[live.index[done]], f[live.index[done]] = live.u[done], live.f[done]
+            live = live.take(keep)
+    u[live.index], f[live.index] = live.u, live.f
+    return _last_candidates(fn_u, _Polished(u=u, f=f, evaluations=evaluations), live, starts.rows, batch)
+
+
+def _last_candidates(
+    fn_u: Objective, polished: _Polished, live: _Live, rows: IntArray, batch: int
+) -> _Polished:
+    """Subproblems that retired converged (in value, or in spacing) have a last Newton candidate that
+    promises nothing worth a call; those still live after ``max_iterations`` get theirs evaluated."""
+    u, f, evaluations = polished.u, polished.f, polished.evaluations
+    moved = np.any(live.candidate != live.u, axis=-1)
     if moved.any():
-        pending, lc = lidx[moved], lc[moved]
+        pending, lc = live.index[moved], live.candidate[moved]
         f_cand = fn_u(lc[:, None, :], rows[pending])[:, 0]
         evaluations += pending.size / batch
         better = f_cand > f[pending]
