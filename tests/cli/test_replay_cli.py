@@ -14,9 +14,19 @@ _DEC = str(lajolla_paths()[3])  # 2021-12-10: 61 pings, the quickest survey
 def test_replay_gnssa_json_and_figures(tmp_path: Path):
     out = tmp_path / "g.json"
     args = ["replay", "gnssa", _DEC, "--runs", "3", "--epochs", "8", "--planners", "recorded,k0,k1,greedy"]
-    res = CliRunner().invoke(app, [*args, "--workers", "1", "--json", str(out), "--figures", str(tmp_path)])
+    nc = tmp_path / "g.nc"
+    res = CliRunner().invoke(
+        app, [*args, "--workers", "1", "--json", str(out), "--figures", str(tmp_path), "--netcdf", str(nc)]
+    )
     assert res.exit_code == 0, res.output
     assert "gnssa_data_20211210: 3 runs, seed 2019" in res.output and "Convergence" in res.output
+    import xarray as xr
+
+    with xr.open_dataset(nc) as ds:
+        assert list(ds["experiment"].values) == ["gnssa_data_20211210"]
+        assert ds["rmsee_m"].dims == ("experiment", "planner", "epoch", "transponder")
+        assert ds.sizes["run"] == 3 and ds.sizes["epoch"] == 8 and ds.attrs["seed"] == 2019
+        assert "gnssa_data_20211210.txt sha256:" in ds.attrs["inputs"]
     rec = json.loads(out.read_text())
     assert rec["runs"] == 3 and rec["planners"] == ["recorded", "k0", "k1", "greedy"]
     survey = rec["surveys"][0]
