@@ -26,6 +26,10 @@ KEYS = {
     "refraction_ppm",
     "sigma_path_m",
     "beta_m",
+    "lat_deg",
+    "lon_deg",
+    "h_m",
+    "converged",
 }
 
 
@@ -38,7 +42,9 @@ def test_localize_gnssa_json_shape_figures_and_spread(tmp_path: Path):
     assert res.exit_code == 0, res.output
     assert "Spread across 2 surveys" in res.output
     data = json.loads(out.read_text())
-    assert set(data) == {"provenance", "surveys", "spread"}
+    assert set(data) == {"provenance", "surveys", "site_velocity", "spread"}
+    assert [Path(i["path"]).name for i in data["provenance"]["inputs"]] == [Path(p).name for p in paths]
+    assert data["site_velocity"]["plate"] == "PCFC" and "Lat0 32.8668" in data["site_velocity"]["reason"]
     assert [s["file"] for s in data["surveys"]] == ["gnssa_data_20211210", "gnssa_data_20220321"]
     assert all(set(s) == KEYS for s in data["surveys"])
     assert {"std_n_m", "std_e_m", "std_u_m", "chi2_n", "sigmas_explain_n", "at_survey_epochs"} <= set(
@@ -69,7 +75,7 @@ def test_site_velocity_option(tmp_path: Path, capsys):
     args = ["localize", "gnssa", *paths, "--site-velocity", "none", "--json", str(out)]
     assert CliRunner().invoke(app, args).exit_code == 0
     assert json.loads(out.read_text())["spread"]["site_velocity"] is None
-    for value, message in (("1,x", "'VE,VN[,VU]' in mm/yr"), ("EURX", "unknown plate 'EURX'")):
+    for value, message in (("1,x", "'VE,VN[,VU]' in mm/yr"), ("EURX", "'EURX' is none of auto, none")):
         with pytest.raises(SystemExit) as exc:
             main(["localize", "gnssa", paths[0], "--site-velocity", value])
         assert exc.value.code == 2
@@ -92,3 +98,34 @@ def test_sound_speed_override_and_unknown_file_errors(tmp_path: Path, capsys):
         code = exc.code
     assert code == 2
     assert "no published sound speed" in " ".join(capsys.readouterr().err.split())
+
+
+def _moved_header(src: Path, dst: Path, lat: float, lon: float) -> Path:
+    """A copy of a La Jolla survey (same file name) whose header puts the site at ``lat, lon``."""
+    text = src.read_text().replace("Lat0=32.8668445", f"Lat0={lat}")
+    text = text.replace("Lon0=-117.2701205", f"Lon0={lon}")
+    dst.mkdir(parents=True, exist_ok=True)
+    (dst / src.name).write_text(text)
+    return dst / src.name
+
+
+def test_auto_site_velocity_comes_from_the_header_location_not_the_file_name(tmp_path: Path):
+    # Same file names as the packaged La Jolla surveys (which sit on the Pacific plate), but headers in
+    # the western North Atlantic (35 N, 70 W): the North American plate's velocity there, about
+    # E -13, N +7 mm/yr (ITRF2014 NOAM pole), not the Pacific's -44, +26 mm/yr.
+    paths = [str(_moved_header(p, tmp_path / "atl", 35.0, -70.0)) for p in lajolla_paths()[3:5]]
+    out = tmp_path / "r.json"
+    res = CliRunner().invoke(app, ["localize", "gnssa", *paths, "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(out.read_text())
+    assert data["site_velocity"]["plate"] == "NOAM"
+    e, n, _ = data["site_velocity"]["velocity_enu_mm_yr"]
+    assert e == pytest.approx(-13.2, abs=0.2) and n == pytest.approx(6.6, abs=0.2)
+    assert "is on NOAM" in " ".join(res.output.split())
+    # in the mid-Atlantic east of the ridge (35 N, 20 W) no plate of the model applies: as surveyed
+    paths = [str(_moved_header(p, tmp_path / "mid", 35.0, -20.0)) for p in lajolla_paths()[3:5]]
+    res = CliRunner().invoke(app, ["localize", "gnssa", *paths, "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(out.read_text())
+    assert data["site_velocity"]["source"] is None and data["spread"]["site_velocity"] is None
+    assert "compared as surveyed" in data["site_velocity"]["reason"]

@@ -64,8 +64,9 @@ def test_start_add_status_next_export(tmp_path: Path, monkeypatch):
         assert j.fixes().shape[0] == n_fix and j.ranges().shape[0] == n_rng
 
     out = _invoke(["survey", "status", journal, "--json", "st.json"])
-    assert f"{n_fix} fixes" in out and "Beacons (ENU from" in out
+    assert f"{n_fix} fixes" in out and "Beacons, ENU from" in out and "(earliest fix)" in out
     status = json.loads(Path("st.json").read_text())
+    assert status["provenance"]["inputs"][0]["path"] == journal and status["fixes"] == n_fix
     assert [b["beacon"] for b in status["beacons"]] == [1, 2]
     assert sum(status["ranges"].values()) == n_rng
     in_estimates = sum(b["ranges_used"] + b["ranges_excluded"] for b in status["beacons"])
@@ -73,7 +74,8 @@ def test_start_add_status_next_export(tmp_path: Path, monkeypatch):
     assert f"ranges: {status['ranges']['used']} used, {status['ranges']['outlier']} outlier" in out
 
     out = _invoke(["survey", "next", journal, "--json", "next.json"])
-    assert "go 4.00 m on bearing" in out
+    assert "go 4.00 m on bearing" in out and "deg (clockwise from true north)" in out
+    assert "heading deg" in out and "lat deg" in out
     nxt = json.loads(Path("next.json").read_text())
     assert nxt["planner"] == "greedy" and nxt["distance_m"] <= 4.0 + 1e-9
     with Journal.open(journal) as j:
@@ -226,12 +228,12 @@ def test_user_errors_are_one_line_messages_and_lose_nothing(tmp_path: Path, caps
         (["survey", "start", journal, "--speed", "-1"], "survey setting speed_mps must be a positive number"),
         (
             ["survey", "start", journal, "--origin", "32.7,abc,0"],
-            "--origin '32.7,abc,0': LON 'abc' is not a number",
+            "--origin: LON 'abc' is not a number",
         ),
-        (["survey", "start", journal, "--origin", "95,0,0"], "origin latitude 95.0 deg is outside [-90, 90]"),
+        (["survey", "start", journal, "--origin", "95,0,0"], "--origin: LAT 95 is outside [-90, 90]"),
         (
             ["survey", "start", journal, "--planner", "best"],
-            "--planner: expected one of greedy, lookahead, random",
+            "unknown planner 'best': use k0 (random yaw), k1..k10",
         ),
         (
             ["survey", "start", journal, "-k", "0", "--planner", "lookahead"],
@@ -270,7 +272,7 @@ def test_user_errors_are_one_line_messages_and_lose_nothing(tmp_path: Path, caps
         (["survey", "export", journal], "nothing to export"),
         (
             ["survey", "add", journal, "--range", "1.5e9,1,5", "--fix", "1,95,0,0"],
-            "LAT 95.0 is outside [-90, 90]",
+            "LAT 95 is outside [-90, 90]",
         ),
     ]
     for args, message in cases:

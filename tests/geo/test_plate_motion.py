@@ -49,3 +49,24 @@ def test_bad_plates_and_velocities_are_refused():
     with pytest.raises(ConfigError, match="2 or 3 finite numbers"):
         given_site_velocity((1.0, float("nan")))
     np.testing.assert_allclose(given_site_velocity((-40.0, 20.0)).velocity_enu_mm_yr, [-40.0, 20.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("lat", "lon", "plate"),
+    [
+        (32.8668445, -117.2701205, "PCFC"),  # La Jolla offshore: west of the Imperial/San Andreas system
+        (34.05, -118.25, "PCFC"),  # Los Angeles, west of the San Andreas big bend
+        (37.77, -122.42, "NOAM"),  # San Francisco, east of the San Andreas
+        (32.7, -114.6, "NOAM"),  # Yuma, east of the Salton Trough
+        (19.7, -155.5, "PCFC"),  # Hawaii
+        (30.0, 160.0, "PCFC"),  # west of the antimeridian
+        (35.0, -70.0, "NOAM"),  # western North Atlantic
+        (35.0, -20.0, None),  # east of the Mid-Atlantic Ridge: a plate the model does not know
+        (0.0, 0.0, None),
+    ],
+)
+def test_plate_at_finds_the_plate_of_the_site(lat, lon, plate):
+    from oceanloc.geo.plate_motion import plate_at
+
+    assert plate_at(lat, lon) == plate
+    assert plate_at(lat, lon + 360.0) == plate  # longitudes east of 180 wrap

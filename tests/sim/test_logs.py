@@ -66,3 +66,31 @@ def test_hdt_headings_follow_the_course_over_ground(tmp_path: Path):
     )
     diff = (course_deg - mid + 180.0) % 360.0 - 180.0
     assert np.median(np.abs(diff[moving[:-lag]])) < 10.0
+
+
+def test_truth_file_is_in_the_earliest_fix_frame_of_the_log(tmp_path: Path):
+    from oceanloc.geo.enu import geodetic_to_enu
+    from oceanloc.sim.logs import read_truth
+
+    logs = simulate_pier_logs(tmp_path, PierLogSettings(duration_s=600.0), np.random.default_rng(3), seed=3)
+    truth = read_truth(logs.truth_path)
+    gps = read_nmea(logs.nmea_path)
+    assert truth.seed == 3 and truth.beacons == (1, 2)
+    assert (truth.origin.lat_deg, truth.origin.lon_deg) == (gps.lat_deg[0], gps.lon_deg[0])
+    # the same points in the simulation's frame are the settings' beacons, to the pymap3d round trip
+    back = geodetic_to_enu(truth.geodetic[:, 0], truth.geodetic[:, 1], truth.geodetic[:, 2], PIER_ORIGIN)
+    np.testing.assert_allclose(back, logs.beacons_enu_m, atol=1e-6)
+    moved = truth.enu_in(truth.origin)
+    np.testing.assert_allclose(np.array([moved[1], moved[2]]), truth.enu_m, atol=1e-6)
+
+
+def test_read_truth_names_a_bad_file(tmp_path: Path):
+    import pytest
+
+    from oceanloc.errors import DataError
+    from oceanloc.sim.logs import read_truth
+
+    bad = tmp_path / "truth.json"
+    bad.write_text('{"beacons": []}')
+    with pytest.raises(DataError, match="not a beacon truth file"):
+        read_truth(bad)

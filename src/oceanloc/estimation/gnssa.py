@@ -53,7 +53,7 @@ from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
-from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S, GnssaSurvey
 from oceanloc.models.acoustics import (
     gradient_path_jacobian,
     gradient_path_m2,
@@ -74,7 +74,7 @@ class GnssaOptions:
     Attributes
     ----------
     sound_speed_mps : float
-        Prior (or fixed) harmonic-mean sound speed, m/s.
+        Prior (or fixed) harmonic-mean sound speed, m/s (1500: nominal sea water; give the survey's).
     estimate_sound_speed : bool
         Make the sound speed an unknown with a prior; False fixes it.
     sigma_sound_speed_mps : float
@@ -123,7 +123,7 @@ class GnssaOptions:
         Add the survey-wide GNSS error (the mean per-ping GNSS covariance) to the reported covariance.
     """
 
-    sound_speed_mps: float
+    sound_speed_mps: float = 1500.0
     estimate_sound_speed: bool = True
     sigma_sound_speed_mps: float = 3.0
     knot_spacing_s: float | None = 900.0
@@ -271,6 +271,38 @@ class GnssaResult:
     def pings_used(self) -> int:
         return int(self.used.sum())
 
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: position and 1-sigma (E, N, U order as named), epoch, acoustic model."""
+        e, n, u = (float(v) for v in self.position_enu_m)
+        se, sn, su = (float(v) for v in self.sigma_enu_m)
+        record = {
+            "file": self.name,
+            "epoch_utc": gnssa_epoch_utc(self.epoch_s),
+            "e_m": e,
+            "n_m": n,
+            "u_m": u,
+            "sigma_e_m": se,
+            "sigma_n_m": sn,
+            "sigma_u_m": su,
+            "lat_deg": None,
+            "lon_deg": None,
+            "h_m": None,
+            "sound_speed_mps": float(self.sound_speed_mps),
+            "pings_used": self.pings_used,
+            "pings_excluded": len(self.exclusions),
+            "residual_rms_m": float(self.residual_rms_m),
+            "gradient_e_per_km": float(self.gradient_per_km[0]),
+            "gradient_n_per_km": float(self.gradient_per_km[1]),
+            "refraction_ppm": float(self.refraction_ppm),
+            "sigma_path_m": float(self.sigma_path_m),
+            "beta_m": float(self.beta_m),
+            "converged": bool(self.converged),
+        }
+        if self.position_geodetic is not None:
+            lat, lon, h = (float(v) for v in self.position_geodetic)
+            record.update(lat_deg=lat, lon_deg=lon, h_m=h)
+        return record
+
 
 @dataclass(frozen=True, slots=True)
 class GnssaProblem:
@@ -406,6 +438,12 @@ def hat_basis(t_s: FloatArray, knots_s: FloatArray) -> FloatArray:
 def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     """Robust MAP position of the transponder of one survey (see the module docstring).
 
+    Five steps, each a function returning a small frozen result: :func:`gross_prescreen` (gross travel
+    times found by a robust first fit), :func:`gnssa_setup` (the MAP problem and its prior),
+    :func:`elevation_cut` (far pings dropped before solving), :func:`robust_solve` (MAP, noise components
+    and the one-at-a-time outlier rule) and :func:`gnssa_covariance` (formal, jackknife and GNSS
+    common-mode parts).
+
     Parameters
     ----------
     survey : GnssaSurvey
@@ -415,6 +453,87 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     -------
     GnssaResult
     """
+    screen = gross_prescreen(survey, options)
+    setup = gnssa_setup(survey, options, screen.gross)
+    cut = elevation_cut(survey, options, setup.initial_m, screen.gross)
+    if cut.candidates.sum() < setup.dim + 2:
+        raise DataError(
+            f"{survey.path}: {int(cut.candidates.sum())} usable pings, need at least {setup.dim + 2}"
+        )
+    sol = robust_solve(survey, options, setup, cut)
+    cov = gnssa_covariance(survey, options, setup, sol)
+    x, used, k0 = sol.x, sol.used, setup.first_knot
+    problem = setup.template.with_mask(used[None, :], sol.sigma_m)
+    resid = _path_residual(problem, x)[0]
+    gross_exclusions = screen.exclusions(survey, resid)
+    n_excluded = len(gross_exclusions) + len(cut.exclusions) + len(sol.exclusions)
+    _refuse_gross_left(survey, options, used, resid, n_excluded)
+    speed = problem.speed(x)[0]
+    geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
+    return GnssaResult(
+        name=survey.name,
+        position_enu_m=x[0, :3].copy(),
+        covariance_m2=cov.total_m2,
+        covariance_formal_m2=cov.formal_m2,
+        covariance_jackknife_m2=cov.jackknife_m2,
+        position_geodetic=geodetic,
+        epoch_s=float(np.mean(survey.t_transmit_s[used])),
+        knot_times_s=setup.knots_s,
+        sound_speed_knots_mps=x[0, k0:].copy(),
+        gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),
+        refraction_ppm=float(x[0, k0 - 1]) if options.estimate_refraction else 0.0,
+        covariance_gnss_m2=cov.gnss_m2,
+        sound_speed_mps=float(np.mean(speed[used])),
+        used=used,
+        exclusions=gross_exclusions + cut.exclusions + sol.exclusions,
+        residual_m=resid,
+        sigma_m=sol.sigma_m,
+        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
+        sigma_path_m=float(sol.sigma_path_m),
+        beta_m=float(sol.beta_m),
+        converged=sol.converged,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaSetup:
+    """The MAP problem of one survey before any ping is dropped (:func:`gnssa_setup`).
+
+    Attributes
+    ----------
+    template : GnssaProblem
+        Every ping, unit sigmas (masks and sigmas are set per solve).
+    knots_s : (K,) float
+        Sound-speed knot times (empty: one constant speed).
+    t_mid_s : (n,) float
+        Mid-times of the pings (transmit and receive averaged), seconds.
+    initial_m : (3,) float
+        Starting position: below the ping with the shortest travel time, metres.
+    prior : GaussianPrior
+        Position, gradient, refraction and knot prior.
+    map_options : MapOptions
+    """
+
+    template: GnssaProblem
+    knots_s: FloatArray
+    t_mid_s: FloatArray
+    initial_m: FloatArray
+    prior: GaussianPrior
+    map_options: MapOptions
+
+    @property
+    def first_knot(self) -> int:
+        return self.template.first_knot
+
+    @property
+    def dim(self) -> int:
+        return self.first_knot + int(self.knots_s.size)
+
+
+def gnssa_setup(survey: GnssaSurvey, options: GnssaOptions, gross: BoolArray | None = None) -> GnssaSetup:
+    """The survey's MAP problem and prior: knots, hat basis, initial guess, prior covariance (position,
+    gradient, refraction, exponentially correlated knots) and the surface constraint; the initial guess
+    leaves out the ``gross`` pings."""
     n = survey.n_pings
     tx, rx = survey.transmit_enu_m, survey.receive_enu_m
     twtt = survey.twtt_s - options.turnaround_s
@@ -437,25 +556,8 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
     )
     k0 = template.first_knot
     dim = k0 + n_knots
-    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
-
-    gross = np.zeros(n, dtype=bool)
-    fit_resid = np.zeros(n)
-    threshold = np.inf
-    if options.prescreen and n >= 8:
-        fit = robust_first_fit(tx, rx, twtt, options.sound_speed_mps, surface)
-        fit_resid = fit.residual_m - np.median(fit.residual_m)
-        threshold = max(options.prescreen_sigmas * fit.sigma_m, options.gross_error_m)
-        gross = np.abs(fit_resid) > threshold
-        if gross.sum() > options.max_gross_fraction * n:
-            raise DataError(
-                f"{survey.path}: {int(gross.sum())} of {n} pings ({100.0 * gross.mean():.0f} %) have travel "
-                f"times no single transponder position explains (|residual| > {threshold:.2f} m at a robust "
-                f"first fit), more than the {100.0 * options.max_gross_fraction:.0f} % allowed "
-                "(max_gross_fraction): the survey cannot be solved reliably; check the travel-time column, "
-                "its units and the turn-around delay"
-            )
-    x0 = _initial_guess(tx[~gross], twtt[~gross], options.sound_speed_mps)
+    keep = np.ones(n, dtype=bool) if gross is None else ~gross
+    x0 = _initial_guess(tx[keep], twtt[keep], options.sound_speed_mps)
     prior_mean = np.concatenate([x0, np.zeros(k0 - 3), np.full(n_knots, options.sound_speed_mps)])[None, :]
     prior_var = [options.sigma_position_prior_m**2] * 3
     if options.estimate_gradient:
@@ -469,14 +571,36 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
         prior_cov[k0:, k0:] = options.sigma_sound_speed_mps**2 * np.exp(
             -lag / options.sound_speed_correlation_s
         )
-    prior = GaussianPrior(mean=prior_mean, cov=prior_cov)
-    map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface)
+    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
+    return GnssaSetup(
+        template=template,
+        knots_s=knots,
+        t_mid_s=t_mid,
+        initial_m=x0,
+        prior=GaussianPrior(mean=prior_mean, cov=prior_cov),
+        map_options=MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=surface),
+    )
 
-    candidates = ~gross
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PingSelection:
+    """Pings kept for solving (:func:`elevation_cut`): ``candidates (n,)`` and the far pings dropped."""
+
+    candidates: BoolArray
+    exclusions: tuple[Exclusion, ...]
+
+
+def elevation_cut(
+    survey: GnssaSurvey, options: GnssaOptions, initial_m: FloatArray, excluded: BoolArray | None = None
+) -> PingSelection:
+    """Drop pings farther than ``max_tan_incidence`` depths horizontally from ``initial_m`` (none when the
+    cut is off), among the pings not already ``excluded`` (the gross errors of :func:`gross_prescreen`)."""
+    tx = survey.transmit_enu_m
+    candidates = np.ones(survey.n_pings, dtype=bool) if excluded is None else ~excluded
     exclusions: list[Exclusion] = []
     if options.max_tan_incidence is not None:
-        depth = np.maximum(tx[:, 2] - x0[2], 1.0)
-        tan_inc = np.hypot(tx[:, 0] - x0[0], tx[:, 1] - x0[1]) / depth
+        depth = np.maximum(tx[:, 2] - initial_m[2], 1.0)
+        tan_inc = np.hypot(tx[:, 0] - initial_m[0], tx[:, 1] - initial_m[1]) / depth
         for i in np.flatnonzero(candidates & (tan_inc > options.max_tan_incidence)):
             candidates[i] = False
             exclusions.append(
@@ -488,14 +612,53 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
                     residual_m=float("nan"),
                 )
             )
-    if candidates.sum() < dim + 2:
-        raise DataError(f"{survey.path}: {int(candidates.sum())} usable pings, need at least {dim + 2}")
+    return PingSelection(candidates=candidates, exclusions=tuple(exclusions))
 
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RobustSolution:
+    """The MAP solution after the outlier rule (:func:`robust_solve`).
+
+    Attributes
+    ----------
+    x : (1, dim) float
+        Unknowns: position, gradient, refraction, sound-speed knots.
+    covariance : (1, dim, dim) float
+        MAP covariance at the last solve.
+    used : (n,) bool
+    sigma_m : (n,) float
+        Per-ping path sigma with the estimated noise components, metres.
+    sigma_path_m, beta_m : float
+        Estimated path noise and far-ping noise per unit tan(incidence), metres.
+    exclusions : tuple of Exclusion
+        Outliers, in the order they were removed.
+    converged : bool
+    """
+
+    x: FloatArray
+    covariance: FloatArray
+    used: BoolArray
+    sigma_m: FloatArray
+    sigma_path_m: float
+    beta_m: float
+    exclusions: tuple[Exclusion, ...]
+    converged: bool
+
+
+def robust_solve(
+    survey: GnssaSurvey, options: GnssaOptions, setup: GnssaSetup, selection: PingSelection
+) -> RobustSolution:
+    """MAP with the noise components re-estimated (three rounds per solve), removing the ping with the
+    largest normalized residual while it exceeds ``outlier_threshold`` (Xie et al. 2023), at most
+    ``max_outlier_fraction`` of the candidates."""
+    template, prior, map_opts = setup.template, setup.prior, setup.map_options
+    candidates = selection.candidates
     sigma_path, beta = 0.05, 0.0
     used = candidates.copy()
-    x = prior_mean.copy()
+    x = prior.mean.copy()
     max_out = int(options.max_outlier_fraction * candidates.sum())
     n_out = 0
+    exclusions: list[Exclusion] = []
     while True:
         gnss_var, tan_inc = _gnss_variance(x[0, :3], survey)
         result = None
@@ -527,58 +690,14 @@ def localize_gnssa(survey: GnssaSurvey, options: GnssaOptions) -> GnssaResult:
                 residual_m=float(resid[worst]),
             )
         )
-
-    problem = template.with_mask(used[None, :], sigma)
-    resid = _path_residual(problem, x)[0]
-    left = used & (np.abs(resid) > options.gross_error_m)
-    if left.any():
-        worst = int(np.argmax(np.where(left, np.abs(resid), 0.0)))
-        n_excluded = len(exclusions) + int(gross.sum())
-        raise DataError(
-            f"{survey.path}: after excluding {n_excluded} pings, {int(left.sum())} used "
-            f"pings still have |residual| > {options.gross_error_m:g} m (line {int(survey.line[worst])}: "
-            f"{resid[worst]:+.1f} m): the survey cannot be solved reliably; check its travel times"
-        )
-    prescreened = [
-        Exclusion(
-            index=int(i),
-            line=int(survey.line[i]),
-            time_s=float(survey.t_transmit_s[i]),
-            reason=f"gross error (pre-screen): |residual| {abs(fit_resid[i]):.1f} m at the robust first fit "
-            f"> {threshold:.2f} m",
-            residual_m=float(resid[i]),
-        )
-        for i in np.flatnonzero(gross)
-    ]
-    exclusions = prescreened + exclusions
-    cov_formal = result.covariance[0, :3, :3]
-    cov_jk = _jackknife(problem, prior, map_opts, x, t_mid, used, options.jackknife_blocks)
-    cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
-    cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
-    cov = cov + cov_gnss
-    speed = problem.speed(x)[0]
-    geodetic = None if survey.origin is None else enu_to_geodetic(x[0, :3], survey.origin)
-    return GnssaResult(
-        name=survey.name,
-        position_enu_m=x[0, :3].copy(),
-        covariance_m2=cov,
-        covariance_formal_m2=cov_formal,
-        covariance_jackknife_m2=cov_jk,
-        position_geodetic=geodetic,
-        epoch_s=float(np.mean(survey.t_transmit_s[used])),
-        knot_times_s=knots,
-        sound_speed_knots_mps=x[0, k0:].copy(),
-        gradient_per_km=x[0, 3:5].copy() if options.estimate_gradient else np.zeros(2),
-        refraction_ppm=float(x[0, k0 - 1]) if options.estimate_refraction else 0.0,
-        covariance_gnss_m2=cov_gnss,
-        sound_speed_mps=float(np.mean(speed[used])),
+    return RobustSolution(
+        x=x,
+        covariance=result.covariance,
         used=used,
-        exclusions=tuple(exclusions),
-        residual_m=resid,
         sigma_m=sigma,
-        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
         sigma_path_m=float(sigma_path),
         beta_m=float(beta),
+        exclusions=tuple(exclusions),
         converged=bool(result.converged[0]),
     )
 
@@ -671,6 +790,105 @@ def _robust_starts(tx: FloatArray, twtt: FloatArray, speed: float) -> list[Float
     return starts
 
 
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Prescreen:
+    """Gross travel-time errors found before the solve (:func:`gross_prescreen`).
+
+    Attributes
+    ----------
+    gross : (n,) bool
+        Pings excluded as gross errors.
+    fit_residual_m : (n,) float
+        Each ping's residual at the robust first fit less their median, metres (zeros when off).
+    threshold_m : float
+        ``max(prescreen_sigmas * 1.4826 MAD, gross_error_m)``; ``inf`` when the pre-screen is off.
+    """
+
+    gross: BoolArray
+    fit_residual_m: FloatArray
+    threshold_m: float
+
+    def exclusions(self, survey: GnssaSurvey, residual_m: FloatArray) -> tuple[Exclusion, ...]:
+        """The gross pings as exclusions, with their residual at the final solution."""
+        return tuple(
+            Exclusion(
+                index=int(i),
+                line=int(survey.line[i]),
+                time_s=float(survey.t_transmit_s[i]),
+                reason=f"gross error (pre-screen): |residual| {abs(self.fit_residual_m[i]):.1f} m at the "
+                f"robust first fit > {self.threshold_m:.2f} m",
+                residual_m=float(residual_m[i]),
+            )
+            for i in np.flatnonzero(self.gross)
+        )
+
+
+def gross_prescreen(survey: GnssaSurvey, options: GnssaOptions) -> Prescreen:
+    """Screen gross travel times with :func:`robust_first_fit` (see the module docstring); refuse a survey
+    with more than ``max_gross_fraction`` of them."""
+    n = survey.n_pings
+    tx, rx = survey.transmit_enu_m, survey.receive_enu_m
+    twtt = survey.twtt_s - options.turnaround_s
+    if not options.prescreen or n < 8 or np.any(twtt <= 0.0):
+        return Prescreen(gross=np.zeros(n, dtype=bool), fit_residual_m=np.zeros(n), threshold_m=np.inf)
+    surface = float(np.min(np.concatenate([tx[:, 2], rx[:, 2]])))
+    fit = robust_first_fit(tx, rx, twtt, options.sound_speed_mps, surface)
+    fit_resid = fit.residual_m - np.median(fit.residual_m)
+    threshold = max(options.prescreen_sigmas * fit.sigma_m, options.gross_error_m)
+    gross = np.abs(fit_resid) > threshold
+    if gross.sum() > options.max_gross_fraction * n:
+        raise DataError(
+            f"{survey.path}: {int(gross.sum())} of {n} pings ({100.0 * gross.mean():.0f} %) have travel "
+            f"times no single transponder position explains (|residual| > {threshold:.2f} m at a robust "
+            f"first fit), more than the {100.0 * options.max_gross_fraction:.0f} % allowed "
+            "(max_gross_fraction): the survey cannot be solved reliably; check the travel-time column, "
+            "its units and the turn-around delay"
+        )
+    return Prescreen(gross=gross, fit_residual_m=fit_resid, threshold_m=float(threshold))
+
+
+def _refuse_gross_left(
+    survey: GnssaSurvey, options: GnssaOptions, used: BoolArray, residual_m: FloatArray, n_excluded: int
+) -> None:
+    """A used ping with a residual above ``gross_error_m`` at the end means no reliable solution."""
+    left = used & (np.abs(residual_m) > options.gross_error_m)
+    if left.any():
+        worst = int(np.argmax(np.where(left, np.abs(residual_m), 0.0)))
+        raise DataError(
+            f"{survey.path}: after excluding {n_excluded} pings, {int(left.sum())} used "
+            f"pings still have |residual| > {options.gross_error_m:g} m (line {int(survey.line[worst])}: "
+            f"{residual_m[worst]:+.1f} m): the survey cannot be solved reliably; check its travel times"
+        )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaCovariance:
+    """The reported position covariance and its parts (:func:`gnssa_covariance`), (3, 3) m^2 each."""
+
+    formal_m2: FloatArray
+    jackknife_m2: FloatArray | None
+    gnss_m2: FloatArray
+    total_m2: FloatArray
+
+
+def gnssa_covariance(
+    survey: GnssaSurvey, options: GnssaOptions, setup: GnssaSetup, solution: RobustSolution
+) -> GnssaCovariance:
+    """Formal MAP covariance plus the positive part of (jackknife - formal), plus the survey-wide GNSS
+    error when ``gnss_common_mode``."""
+    used = solution.used
+    problem = setup.template.with_mask(used[None, :], solution.sigma_m)
+    cov_formal = solution.covariance[0, :3, :3]
+    cov_jk = _jackknife(
+        problem, setup.prior, setup.map_options, solution.x, setup.t_mid_s, used, options.jackknife_blocks
+    )
+    cov = cov_formal if cov_jk is None else cov_formal + _positive_part(cov_jk - cov_formal)
+    cov_gnss = _gnss_common_mode(survey, used) if options.gnss_common_mode else np.zeros((3, 3))
+    return GnssaCovariance(
+        formal_m2=cov_formal, jackknife_m2=cov_jk, gnss_m2=cov_gnss, total_m2=cov + cov_gnss
+    )
+
+
 def _initial_guess(tx: FloatArray, twtt: FloatArray, speed: float) -> FloatArray:
     """Below the ping with the shortest travel time, at half its two-way path."""
     i = int(np.argmin(twtt))
@@ -751,3 +969,11 @@ def _positive_part(matrix: FloatArray) -> FloatArray:
     """The positive semi-definite part of a symmetric matrix."""
     w, v = np.linalg.eigh(0.5 * (matrix + matrix.T))
     return (v * np.maximum(w, 0.0)) @ v.T
+
+
+def gnssa_epoch_utc(epoch_s: float) -> str:
+    """A GNSS-A epoch (seconds after 2020-01-01 UTC, the files' time base) as ISO 8601 UTC."""
+    import datetime as dt
+
+    stamp = dt.datetime.fromtimestamp(GPS_EPOCH_2020_UNIX_S + float(epoch_s), tz=dt.UTC)
+    return stamp.isoformat(timespec="seconds")

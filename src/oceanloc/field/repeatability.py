@@ -17,7 +17,7 @@ import numpy as np
 
 from oceanloc._typing import BoolArray, FloatArray
 from oceanloc.errors import ConfigError
-from oceanloc.geo.plate_motion import SiteVelocity
+from oceanloc.geo.plate_motion import SECONDS_PER_YEAR, SiteVelocity
 
 MIN_FIT_SPAN_S: float = 30.0 * 86400.0
 """Shortest span of survey epochs over which a velocity is fitted (a month)."""
@@ -85,6 +85,37 @@ class SurveySpread:
     def sigmas_explain_spread(self) -> BoolArray:
         """Per axis: the chi-square lies inside its 95% interval."""
         return (self.chi2_enu >= self.chi2_bounds[0]) & (self.chi2_enu <= self.chi2_bounds[1])
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: per axis (e, n, u) the spread, the RMS sigma and the chi-square test; the
+        velocity used and the one the surveys imply, in mm/yr."""
+        out: dict = {"n_surveys": self.n_surveys}
+        for axis, j in (("e", 0), ("n", 1), ("u", 2)):
+            out[f"std_{axis}_m"] = float(self.std_enu_m[j])
+            out[f"rms_sigma_{axis}_m"] = float(self.rms_sigma_enu_m[j])
+            out[f"chi2_{axis}"] = float(self.chi2_enu[j])
+            out[f"sigmas_explain_{axis}"] = bool(self.sigmas_explain_spread[j])
+        out["chi2_95_range"] = [float(v) for v in self.chi2_bounds]
+        out["reference_epoch_s"] = float(self.reference_epoch_s)
+        out["site_velocity"] = (
+            None
+            if self.velocity is None
+            else {"source": self.velocity.source, **_enu(self.velocity.velocity_enu_mm_yr)}
+        )
+        if self.fitted_velocity_enu_mps is not None and self.fitted_velocity_sigma_enu_mps is not None:
+            out["fitted_velocity"] = {
+                **_mm_yr(self.fitted_velocity_enu_mps),
+                **{f"sigma_{k}": v for k, v in _mm_yr(self.fitted_velocity_sigma_enu_mps).items()},
+            }
+        return out
+
+
+def _mm_yr(v_mps: FloatArray) -> dict[str, float]:
+    return _enu(np.asarray(v_mps) * 1e3 * SECONDS_PER_YEAR)
+
+
+def _enu(v_mm_yr: FloatArray) -> dict[str, float]:
+    return {"e_mm_yr": float(v_mm_yr[0]), "n_mm_yr": float(v_mm_yr[1]), "u_mm_yr": float(v_mm_yr[2])}
 
 
 def survey_spread(

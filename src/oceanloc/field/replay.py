@@ -38,7 +38,6 @@ import numpy as np
 
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from oceanloc.config.survey import PlannerSettings
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.consistency import nees
 from oceanloc.estimation.map_gauss_newton import (
@@ -51,7 +50,13 @@ from oceanloc.estimation.map_gauss_newton import (
 from oceanloc.models.measurements import two_way_range_jacobian, two_way_range_m
 from oceanloc.planning.information import log_det_information
 from oceanloc.planning.measurement_sites import MeasurementSitePlanner, PlanningState
-from oceanloc.planning.site_planners import make_site_planner
+from oceanloc.planning.site_planners import (
+    PlannerSettings,
+    make_site_planner,
+    parse_site_planner,
+    site_planner_label,
+    site_planner_name,
+)
 from oceanloc.units import DEG
 
 RECORDED = "recorded"
@@ -247,33 +252,29 @@ class ReplaySettings:
 
 
 def planner_settings(name: str, reach_m: float) -> PlannerSettings | None:
-    """The :class:`PlannerSettings` a replay planner name stands for (``None`` for ``recorded``).
+    """The :class:`PlannerSettings` a replay planner name stands for (``None`` for ``recorded``, the log's
+    own order, which is not a planner).
 
-    Names: ``recorded``; ``k0`` (random yaw rate, the journal's k = 0); ``k1`` .. ``k10`` (look-ahead);
-    ``greedy`` (D-optimal point within ``d_max``); ``random-disk`` (uniform in the ``d_max`` disk).
+    Every other name goes through :func:`oceanloc.planning.site_planners.parse_site_planner` (``k0``,
+    ``k1`` .. ``k10``, ``greedy``, ``random-disk``, ...), with ``d_max = reach_m`` for the point planners.
     """
-    if name == RECORDED:
+    if name.strip().lower() == RECORDED:
         return None
-    if name == "k0":
-        return PlannerSettings(kind="random-yaw")
-    if name == "greedy":
-        return PlannerSettings(kind="greedy", max_distance_m=reach_m)
-    if name == "random-disk":
-        return PlannerSettings(kind="random-disk", max_distance_m=reach_m)
-    if name.startswith("k") and name[1:].isdigit() and 1 <= int(name[1:]) <= 10:
-        return PlannerSettings(kind="lookahead", horizon=int(name[1:]))
-    raise ConfigError(
-        f"unknown planner '{name}': use recorded, k0 (random yaw), k1..k10 (look-ahead), greedy or "
-        "random-disk"
-    )
+    return parse_site_planner(name, max_distance_m=reach_m)
+
+
+def planner_name(text: str) -> str:
+    """The canonical name of a replay planner: ``recorded`` or :func:`site_planner_name` (``k0``, ``k2``,
+    ``greedy``, ``random-disk``); raises a ConfigError naming the accepted names."""
+    settings = planner_settings(text, 1.0)
+    return RECORDED if settings is None else site_planner_name(settings)
 
 
 def planner_label(name: str) -> str:
-    """Label of a replay planner in tables and figures."""
-    labels = {RECORDED: "recorded order", "k0": "k = 0 (random yaw)", "random-disk": "random disk"}
-    if name in labels:
-        return labels[name]
-    return "greedy (d_max)" if name == "greedy" else f"k = {name[1:]}"
+    """Label of a replay planner in tables and figures (:func:`site_planner_label`, or ``recorded
+    order``)."""
+    settings = planner_settings(name, 1.0)
+    return "recorded order" if settings is None else site_planner_label(settings)
 
 
 def snap_to_records(

@@ -18,20 +18,24 @@ in one go or by a process that was killed and re-run.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from oceanloc._typing import FloatArray, IntArray
 from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.errors import DataError
+from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.consistency import ConfidenceEllipse, confidence_ellipse
 from oceanloc.estimation.range_logs import localize_beacons
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
-from oceanloc.io.journal import JournalRecords
-from oceanloc.io.usbl import AlignedRanges, align_ranges
+from oceanloc.io.journal import AppendCounts, Journal, JournalRecords, append_gps_log, append_range_log
+from oceanloc.io.nmea import read_nmea
+from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import AlignedRanges, align_ranges, format_utc, read_usbl
 from oceanloc.planning.measurement_sites import PlanningState
-from oceanloc.planning.site_planners import make_site_planner
+from oceanloc.planning.site_planners import make_site_planner, site_planner_name
 from oceanloc.planning.status import PlanStatus
 
 MIN_RANGES = 4
@@ -111,6 +115,39 @@ class SurveyEstimates:
         """Area of each 95 % ellipse, ``pi a b``, square metres."""
         return np.pi * self.ellipses.semi_major_m * self.ellipses.semi_minor_m
 
+    def to_record(self) -> dict:
+        """Plain JSON-ready data (``survey status --json``): the origin, per beacon the estimate (ENU and
+        latitude/longitude), 1-sigma, covariance, 95 % ellipse (azimuth clockwise from north), counts."""
+        beacons = []
+        for i, b in enumerate(self.beacons):
+            beacons.append(
+                {
+                    "beacon": int(b),
+                    "enu_m": self.positions_enu_m[i].tolist(),
+                    "sigma_enu_m": self.sigma_enu_m[i].tolist(),
+                    "covariance_enu_m2": self.covariances_m2[i].tolist(),
+                    "lat_deg": float(self.positions_geodetic[i, 0]),
+                    "lon_deg": float(self.positions_geodetic[i, 1]),
+                    "h_m": float(self.positions_geodetic[i, 2]),
+                    "ellipse95_semi_major_m": float(self.ellipses.semi_major_m[i]),
+                    "ellipse95_semi_minor_m": float(self.ellipses.semi_minor_m[i]),
+                    "ellipse95_major_azimuth_deg": float(self.ellipse_azimuth_deg[i]),
+                    "ranges_used": int(self.ranges_used[i]),
+                    "ranges_excluded": int(self.ranges_excluded[i]),
+                    "residual_rms_m": float(self.residual_rms_m[i]),
+                }
+            )
+        o = self.origin
+        counts = np.bincount(self.range_status, minlength=len(RANGE_STATUS)).tolist()
+        return {
+            "origin": {"lat_deg": o.lat_deg, "lon_deg": o.lon_deg, "h_m": o.h_m},
+            "beacons": beacons,
+            "waiting": {
+                str(b): int(c) for b, c in zip(self.waiting_beacons, self.waiting_ranges, strict=True)
+            },
+            "ranges": dict(zip(RANGE_STATUS, counts, strict=True)),
+        }
+
     def ellipse_rings_geodetic(self, n: int = 129) -> FloatArray:
         """The 95 % ellipses as closed rings of latitude, longitude, height, ``(M, n, 3)``.
 
@@ -131,7 +168,7 @@ class Waypoint:
     Attributes
     ----------
     planner : str
-        Planner kind.
+        Planner name (:func:`~oceanloc.planning.site_planners.site_planner_name`: k0, k2, greedy, ...).
     from_t_unix_s : float
         Time of the last fix, the planning start.
     from_enu_m : (3,) float
@@ -158,6 +195,8 @@ class Waypoint:
     beacons : (M,) int
         The beacons planned for.
     status : PlanStatus
+    origin : EnuOrigin or None
+        The ENU frame of the positions above (the estimates').
     """
 
     planner: str
@@ -176,6 +215,51 @@ class Waypoint:
     objective_nats: float
     beacons: IntArray
     status: PlanStatus
+    origin: EnuOrigin | None = None
+
+    @property
+    def from_heading_deg(self) -> float | None:
+        """The vehicle's true heading at the start (clockwise from north, degrees); None when unused."""
+        return None if self.heading_source == "unused" else _yaw_to_true_heading(self.yaw_rad)
+
+    @property
+    def planned_headings_deg(self) -> FloatArray:
+        """True bearing of each planned leg (from the previous site), degrees clockwise from north."""
+        sites = np.vstack([self.from_enu_m, self.waypoints_enu_m])
+        step = np.diff(sites, axis=0)
+        return np.mod(90.0 - np.degrees(np.arctan2(step[:, 1], step[:, 0])), 360.0)
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data (``survey next --json``); headings and bearings clockwise from north."""
+        sites = [
+            {
+                "e_m": float(p[0]), "n_m": float(p[1]), "u_m": float(p[2]),
+                "lat_deg": float(g[0]), "lon_deg": float(g[1]), "h_m": float(g[2]),
+            }
+            for p, g in zip(self.waypoints_enu_m, self.waypoints_geodetic, strict=True)
+        ]  # fmt: skip
+        return {
+            "planner": self.planner,
+            "from": {
+                "utc": format_utc(self.from_t_unix_s),
+                "enu_m": self.from_enu_m.tolist(),
+                "heading_deg": self.from_heading_deg,
+            },
+            "heading_source": self.heading_source,
+            "next": sites[0] | {"heading_deg": self.next_heading_deg},
+            "distance_m": self.distance_m,
+            "bearing_deg": self.bearing_deg,
+            "waypoints": sites,
+            "yaw_rates_deg_s": None
+            if self.yaw_rates_rad_s is None
+            else np.degrees(self.yaw_rates_rad_s).tolist(),
+            "objective_nats": self.objective_nats,
+            "beacons": self.beacons.tolist(),
+            "status": self.status.value,
+            "origin": None
+            if self.origin is None
+            else {"lat_deg": self.origin.lat_deg, "lon_deg": self.origin.lon_deg, "h_m": self.origin.h_m},
+        }
 
 
 def survey_origin(records: JournalRecords, settings: JournalSettings) -> EnuOrigin:
@@ -328,7 +412,7 @@ def next_waypoint(
     nxt = plan.next_pos_enu_m[0]
     step = nxt - start
     return Waypoint(
-        planner=kind,
+        planner=site_planner_name(settings.planner),
         from_t_unix_s=float(records.fix_t_unix_s[-1]),
         from_enu_m=start.copy(),
         yaw_rad=float(yaw),
@@ -344,6 +428,7 @@ def next_waypoint(
         objective_nats=float(plan.objective[0]),
         beacons=est.beacons.copy(),
         status=plan.status,
+        origin=est.origin,
     )
 
 
@@ -368,3 +453,159 @@ def _true_heading_to_yaw(heading_deg: float) -> float:
 def _yaw_to_true_heading(yaw_rad: float) -> float:
     """Yaw (radians counter-clockwise from east) to true heading in ``[0, 360)`` degrees."""
     return float((90.0 - np.rad2deg(yaw_rad)) % 360.0)
+
+
+# -- the survey commands' operations on a journal file (one call per command) --------------------------
+
+MAX_RANGE_M = 10_000.0
+"""Longest range accepted on the command line, metres."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class JournalAddition:
+    """What ``survey add`` appended.
+
+    Attributes
+    ----------
+    sources : tuple of (str, str)
+        Per file (or ``--fix``/``--range``), its name and the counts appended (``AppendCounts`` text).
+    conflicts : tuple of str
+        Records given on the command line whose key is stored with another value (kept as stored).
+    qc : QcReport
+        Lines skipped in the files read.
+    n_fixes, n_headings, n_ranges : int
+        The journal's totals afterwards.
+    """
+
+    sources: tuple[tuple[str, str], ...]
+    conflicts: tuple[str, ...]
+    qc: QcReport
+    n_fixes: int
+    n_headings: int
+    n_ranges: int
+
+    def to_record(self) -> dict:
+        return {
+            "sources": [{"source": a, "counts": b} for a, b in self.sources],
+            "conflicts": list(self.conflicts),
+            "qc": self.qc.counts(),
+            "fixes": self.n_fixes,
+            "headings": self.n_headings,
+            "ranges": self.n_ranges,
+        }
+
+
+def add_to_journal(
+    path: str | Path,
+    *,
+    nmea: Sequence[str | Path] = (),
+    ranges: Sequence[str | Path] = (),
+    fixes: Sequence[tuple[float, float, float, float]] = (),
+    manual_ranges: Sequence[tuple[float, int, float]] = (),
+) -> JournalAddition:
+    """Append GPS logs, range logs, fixes ``(t, lat, lon, h)`` and ranges ``(t, beacon, r)`` to a started
+    journal, one transaction per record. Everything is read and checked before the first write, so an
+    error leaves the journal as it was; records already stored change nothing.
+
+    Raises
+    ------
+    ConfigError
+        If nothing is given, a range is out of ``(0, MAX_RANGE_M]`` or names a beacon the survey does not
+        have.
+    """
+    if not (nmea or ranges or fixes or manual_ranges):
+        raise ConfigError(
+            "nothing to add: give --nmea FILE, --ranges FILE, --fix T,LAT,LON,H or --range T,BEACON,R"
+        )
+    with Journal.open(path) as j:
+        settings = JournalSettings.from_meta(j.meta(), str(path))
+        known = settings.beacons or None
+        for t, beacon, r in manual_ranges:
+            where = f"--range {t:.3f},{beacon},{r:g}"
+            if not 0.0 < r <= MAX_RANGE_M:
+                raise ConfigError(f"{where}: R {r} m is not in (0, {MAX_RANGE_M:g}]")
+            if known is not None and beacon not in known:
+                beacons = ", ".join(map(str, known))
+                raise ConfigError(f"{where}: beacon {beacon} is not one of the survey's beacons {beacons}")
+        qc = QcReport()
+        gps_logs = [(p, read_nmea(p, qc=qc)) for p in nmea]
+        range_logs = [
+            (p, read_usbl(p, sound_speed_mps=settings.sound_speed_mps, beacons=known, qc=qc)) for p in ranges
+        ]
+        sources: list[tuple[str, str]] = []
+        for p, log in gps_logs:
+            fix_counts, head_counts = append_gps_log(j, log, p, qc)
+            sources.append((str(p), f"{fix_counts}, {head_counts}"))
+        for p, log in range_logs:
+            sources.append((str(p), str(append_range_log(j, log, p, qc))))
+        conflicts: list[str] = []
+        if fixes:
+            same_fix = lambda f: j.fix_at(f[0]) == f[1:]  # noqa: E731
+            sources.append(("--fix", str(_add_manual(fixes, j.add_fix, same_fix, "fixes", conflicts))))
+        if manual_ranges:
+            same_range = lambda r: j.range_at(r[0], r[1]) == r[2]  # noqa: E731
+            counts = _add_manual(manual_ranges, j.add_range, same_range, "ranges", conflicts)
+            sources.append(("--range", str(counts)))
+        rec = j.records()
+    return JournalAddition(
+        sources=tuple(sources), conflicts=tuple(conflicts), qc=qc, n_fixes=rec.n_fixes,
+        n_headings=int(rec.heading_deg.size), n_ranges=rec.n_ranges,
+    )  # fmt: skip
+
+
+def _add_manual(
+    records: Sequence[tuple],
+    add: Callable[..., bool],
+    same: Callable[[tuple], bool],
+    kind: str,
+    out: list[str],
+) -> AppendCounts:
+    """Append records given on the command line; one already stored with other values is kept as stored
+    (and named in ``out``)."""
+    new = old = 0
+    for rec in records:
+        if add(*rec):
+            new += 1
+        elif same(rec):
+            old += 1
+        else:
+            out.append(f"{kind[:-1]} {rec}: another value is stored for this key; kept as stored")
+    return AppendCounts(kind=kind, new=new, already_stored=old, conflicting=len(records) - new - old)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class JournalStatus:
+    """A journal's settings, record counts and current estimates (None before the first fix)."""
+
+    path: str
+    settings: JournalSettings
+    records: JournalRecords
+    estimates: SurveyEstimates | None
+
+    def to_record(self) -> dict:
+        rec = self.records
+        base = {
+            "journal": self.path,
+            "fixes": rec.n_fixes,
+            "headings": int(rec.heading_deg.size),
+            "ranges_recorded": rec.n_ranges,
+        }
+        return base | (self.estimates.to_record() if self.estimates is not None else {"beacons": []})
+
+
+def journal_status(path: str | Path) -> JournalStatus:
+    """Read a journal and estimate its beacons (``survey status``)."""
+    with Journal.open(path) as j:
+        settings = JournalSettings.from_meta(j.meta(), str(path))
+        rec = j.records()
+    est = survey_estimates(rec, settings) if rec.n_fixes else None
+    return JournalStatus(path=str(path), settings=settings, records=rec, estimates=est)
+
+
+def journal_next_waypoint(path: str | Path, *, seed: int = 0) -> Waypoint:
+    """The next waypoint of a journal's survey (``survey next``); the random planners draw from a
+    generator seeded by ``seed`` and the record counts, so a re-run on the same journal repeats."""
+    with Journal.open(path) as j:
+        settings = JournalSettings.from_meta(j.meta(), str(path))
+        rec = j.records()
+    return next_waypoint(rec, settings, rng=np.random.default_rng([seed, rec.n_fixes, rec.n_ranges]))

@@ -9,11 +9,13 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from oceanloc.field.survey_journal import ELLIPSE_CONFIDENCE, RANGE_STATUS, SurveyEstimates
+from oceanloc.errors import ConfigError, DataError
+from oceanloc.field.survey_journal import ELLIPSE_CONFIDENCE, RANGE_STATUS, SurveyEstimates, journal_status
 from oceanloc.io.csv_tables import write_csv
 from oceanloc.io.geojson import line_feature, point_feature, polygon_feature, write_geojson
 from oceanloc.io.journal import JournalRecords
@@ -137,3 +139,39 @@ def export_csv(folder: str | Path, records: JournalRecords, estimates: SurveyEst
 
 def _plain(value: object) -> object:
     return value.item() if isinstance(value, np.generic) else value
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class JournalExport:
+    """What ``survey export`` wrote: the GeoJSON file and the CSV tables (paths), and what they hold."""
+
+    geojson: Path | None
+    csv: tuple[Path, ...]
+    csv_folder: Path | None
+    n_beacons: int
+    n_fixes: int
+
+
+def export_journal(
+    path: str | Path, *, geojson: str | Path | None = None, csv: str | Path | None = None
+) -> JournalExport:
+    """Export a journal's estimates with their 95 % ellipses and the track (GeoJSON) and every table (CSV).
+
+    Raises
+    ------
+    ConfigError
+        If neither output is given.
+    """
+    if geojson is None and csv is None:
+        raise ConfigError("nothing to export: give --geojson PATH and/or --csv DIR")
+    status = journal_status(path)
+    if status.estimates is None:
+        raise DataError("no GPS fix in the journal yet: nothing to export")
+    rec, est = status.records, status.estimates
+    return JournalExport(
+        geojson=None if geojson is None else export_geojson(geojson, rec, est),
+        csv=() if csv is None else tuple(export_csv(csv, rec, est)),
+        csv_folder=None if csv is None else Path(csv),
+        n_beacons=est.n_beacons,
+        n_fixes=rec.n_fixes,
+    )

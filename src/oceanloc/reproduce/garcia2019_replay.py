@@ -13,9 +13,12 @@ reference solution over all pings as the truth. Readings: :mod:`oceanloc.field.r
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,16 +26,26 @@ from oceanloc._typing import FloatArray
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult
 from oceanloc.evaluation.replay import ReplayStudy, epochs_to_reach, replay_planners
-from oceanloc.field.replay import DEFAULT_PLANNERS, RECORDED, RecordSet, ReplaySettings
+from oceanloc.field.range_logs import LogPair, read_log_pair
+from oceanloc.field.replay import DEFAULT_PLANNERS, RECORDED, RecordSet, ReplaySettings, planner_label
 from oceanloc.field.replay_records import gnssa_replay_records, log_reference, range_log_records
-from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
+from oceanloc.io.gnssa import GnssaSurvey, read_gnssa, survey_sound_speeds_mps
 from oceanloc.io.usbl import AlignedRanges
+from oceanloc.sim.logs import PIER_ORIGIN, BeaconTruth, read_truth
 from oceanloc.units import DEG
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 TABULATED_EPOCHS: tuple[int, ...] = (3, 7, 30)
 PAPER_RUNS = 100
 LOG_BEACONS_ENU_M = np.array([[9.21, 1.68, -1.15], [2.79, 0.44, -1.15]])
-"""Journal Tables VI and VIII: the beacons' GPS-surveyed positions (``oceanloc simulate logs`` uses them)."""
+"""Journal Tables VI and VIII: the beacons' GPS-surveyed positions (``oceanloc simulate logs`` uses them),
+ENU in the journal's frame (:data:`JOURNAL_ORIGIN`)."""
+JOURNAL_ORIGIN: EnuOrigin = PIER_ORIGIN
+"""Origin of the journal's frame (Section VI-C), in which :data:`LOG_BEACONS_ENU_M` and
+:data:`LOG_START_ENU_M` are given."""
 LOG_START_ENU_M = np.array([8.62, -6.77, 0.0])
 LOG_START_YAW_DEG = 13.0
 TABLE_BEACONS: dict[str, tuple[int, ...]] = {"VII": (1,), "IX": (1, 2)}
@@ -150,6 +163,14 @@ class ReplayExperiment:
     studies: dict[str, ReplayStudy]
     rows: list[ReplayRow]
     convergence: list[ConvergenceRow]
+
+    def to_record(self) -> dict[str, object]:
+        """Plain JSON-ready data: settings, table rows, convergence and every planner's curves."""
+        return experiment_record(self)
+
+    def to_dataset(self) -> xr.Dataset:
+        """Every run of every planner: dims ``planner``, ``run``, ``epoch``, ``transponder``."""
+        return experiment_dataset(self)
 
 
 def replay_rows(
@@ -344,7 +365,8 @@ class LogsReplay:
     truth_enu_m : dict of int to (3,) float
         The positions errors are measured against, per beacon.
     truth_source : str
-        ``"given"`` or ``"estimate"`` (the robust estimate over every range).
+        ``"given"``, ``"journal"``, ``"file NAME"`` or ``"estimate"`` (the robust estimate over every
+        range).
     estimate_enu_m : dict of int to (3,) float
         The robust estimate over every range (its outliers are left out of the records).
     experiments : dict of str to ReplayExperiment
@@ -354,6 +376,28 @@ class LogsReplay:
     truth_source: str
     estimate_enu_m: dict[int, FloatArray]
     experiments: dict[str, ReplayExperiment]
+    logs: LogPair | None = None
+    runs: int = 0
+    seed: int = 0
+    planners: tuple[str, ...] = ()
+    inputs: tuple[str, ...] = ()
+
+    def to_record(self) -> dict[str, object]:
+        """Plain JSON-ready data: the origin, the reference used, and every table's record."""
+        return {
+            "seed": self.seed,
+            "runs": self.runs,
+            "planners": list(self.planners),
+            "origin": None if self.logs is None else self.logs.origin_record(),
+            "truth_source": self.truth_source,
+            "truth_enu_m": {str(b): [float(x) for x in v] for b, v in self.truth_enu_m.items()},
+            "estimate_enu_m": {str(b): [float(x) for x in v] for b, v in self.estimate_enu_m.items()},
+            "tables": {name: experiment_record(exp) for name, exp in self.experiments.items()},
+        }
+
+    def to_dataset(self) -> xr.Dataset:
+        """Tables VII and IX along ``experiment`` (see :func:`replays_dataset`)."""
+        return replays_dataset(self.experiments)
 
 
 def replay_logs(
@@ -406,7 +450,7 @@ def replay_logs(
     )
 
 
-def experiment_json(exp: ReplayExperiment) -> dict[str, object]:
+def experiment_record(exp: ReplayExperiment) -> dict[str, object]:
     """The machine-readable record of one replayed record set."""
     s = exp.settings
     return {
@@ -454,6 +498,7 @@ def experiment_json(exp: ReplayExperiment) -> dict[str, object]:
         ],
         "planners": {
             name: {
+                "label": planner_label(name),
                 "runs": st.runs,
                 "rmsee_m": st.rmsee_m[:, 0],
                 "logdet_mean": st.log_det.mean,
@@ -464,3 +509,241 @@ def experiment_json(exp: ReplayExperiment) -> dict[str, object]:
             for name, st in exp.studies.items()
         },
     }
+
+
+def experiment_dataset(exp: ReplayExperiment) -> xr.Dataset:
+    """The replay Monte Carlo of one record set as a Dataset (CF units and long names).
+
+    Dims: ``planner`` (names, with their labels), ``run`` (global run index: its seed), ``epoch`` (1..N),
+    ``transponder`` (the record set's transponders, 1-based), ``axis`` (E, N, U). Planning quantities
+    defined between epochs (snap distance) are NaN at epoch 1.
+    """
+    import xarray as xr  # imported on use: the command line starts without xarray
+
+    names = list(exp.studies)
+    hist = [exp.studies[n].histories for n in names]
+    runs = hist[0].run_indices
+    n = exp.settings.epochs
+
+    def stack(get: Callable[[object], np.ndarray]) -> np.ndarray:
+        return np.stack([get(h) for h in hist])
+
+    snap = stack(lambda h: np.concatenate([np.full((h.runs, 1), np.nan), h.snap_distance_m], axis=1))
+    m = exp.records.n_transponders
+    dims4 = ("planner", "run", "epoch", "transponder")
+    data = {
+        "error_m": (
+            (*dims4, "axis"),
+            stack(lambda h: h.errors_m),
+            {"units": "m", "long_name": "reference minus estimate (eq. 42)"},
+        ),
+        "error_norm_m": (
+            dims4,
+            np.linalg.norm(stack(lambda h: h.errors_m), axis=-1),
+            {"units": "m", "long_name": "distance from the estimate to the reference"},
+        ),
+        "log_det": (
+            ("planner", "run", "epoch"),
+            stack(lambda h: h.log_det),
+            {"units": "1", "long_name": "log det of the information matrix Y_n (eq. 32), nats"},
+        ),
+        "nees": (
+            ("planner", "run", "epoch"),
+            stack(lambda h: h.nees),
+            {"units": "1", "long_name": f"normalized estimation error squared (eq. 44), {3 * m} dof"},
+        ),
+        "snap_distance_m": (
+            ("planner", "run", "epoch"),
+            snap,
+            {"units": "m", "long_name": "distance from the planned point to the record used (eq. 31)"},
+        ),
+        "record": (
+            ("planner", "run", "epoch"),
+            stack(lambda h: h.chosen),
+            {"units": "1", "long_name": "index of the record used"},
+        ),
+        "rmsee_m": (
+            ("planner", "epoch", "transponder"),
+            np.stack([exp.studies[p].rmsee_m for p in names]),
+            {"units": "m", "long_name": "root mean square estimation error over runs (eq. 45)"},
+        ),
+        "reference_enu_m": (
+            ("transponder", "axis"),
+            exp.records.reference_enu_m,
+            {"units": "m", "long_name": "reference transponder position, ENU"},
+        ),
+    }
+    coords = {
+        "planner": ("planner", names, {"long_name": "planner"}),
+        "planner_label": ("planner", [planner_label(p) for p in names], {"long_name": "planner label"}),
+        "run": ("run", runs, {"units": "1", "long_name": "Monte Carlo run (its seed index)"}),
+        "epoch": ("epoch", np.arange(1, n + 1), {"units": "1", "long_name": "measurement epoch n"}),
+        "transponder": ("transponder", np.arange(1, m + 1), {"units": "1", "long_name": "transponder"}),
+        "axis": ("axis", ["E", "N", "U"], {"long_name": "east, north, up"}),
+    }
+    s = exp.settings
+    attrs = {
+        "title": f"replay on recorded data: {exp.records.name}",
+        "records": exp.records.name,
+        "n_records": exp.records.n_records,
+        "reach_m": s.reach_m,
+        "speed_mps": s.speed_mps,
+        "max_yaw_rate_deg_s": s.max_yaw_rate_rad_s / DEG,
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def replays_dataset(experiments: Mapping[str, ReplayExperiment]) -> xr.Dataset:
+    """Several replayed record sets in one Dataset, along ``experiment`` (Table VII/IX, or the surveys);
+    transponders a record set does not have are NaN."""
+    import xarray as xr
+
+    parts = [exp.to_dataset().expand_dims(experiment=[label]) for label, exp in experiments.items()]
+    ds = xr.concat(parts, dim="experiment", join="outer", combine_attrs="override")
+    ds["experiment"].attrs["long_name"] = "replayed record set"
+    ds.attrs = {"title": "replay on recorded data (Garcia et al. 2019, Section VI)"}
+    return ds
+
+
+def journal_frame_to(origin: EnuOrigin, enu_m: Sequence[Sequence[float]] | FloatArray) -> FloatArray:
+    """Points given in the journal's frame (:data:`JOURNAL_ORIGIN`) in the ENU frame of ``origin``."""
+    geo = enu_to_geodetic(np.asarray(enu_m, dtype=float), JOURNAL_ORIGIN).reshape(-1, 3)
+    return geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin).reshape(-1, 3)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaReplays:
+    """GNSS-A surveys replayed (``replay gnssa``): one :class:`GnssaReplay` per file."""
+
+    replays: tuple[GnssaReplay, ...]
+    runs: int
+    seed: int
+    planners: tuple[str, ...]
+    epochs: int
+    inputs: tuple[str, ...]
+
+    def to_record(self) -> dict[str, object]:
+        return {
+            "seed": self.seed,
+            "runs": self.runs,
+            "epochs": self.epochs,
+            "planners": list(self.planners),
+            "surveys": [
+                {
+                    "file": r.survey,
+                    "reference": {
+                        "enu_m": [float(v) for v in r.reference.position_enu_m],
+                        "sigma_enu_m": [float(v) for v in r.reference.sigma_enu_m],
+                        "pings_used": r.reference.pings_used,
+                    },
+                    **experiment_record(r.experiment),
+                }
+                for r in self.replays
+            ],
+        }
+
+    def to_dataset(self) -> xr.Dataset:
+        return replays_dataset({r.survey: r.experiment for r in self.replays})
+
+
+def replay_gnssa_files(
+    paths: Sequence[str | Path],
+    *,
+    sound_speeds_mps: Sequence[float] = (),
+    runs: int = PAPER_RUNS,
+    seed: int = 2019,
+    planners: Sequence[str] = DEFAULT_PLANNERS,
+    epochs: int = 50,
+    step_m: float | None = None,
+    reach_m: float | None = None,
+    max_yaw_rate_deg_s: float = 30.0,
+    prior_sigma_enu_m: Sequence[float] = (100.0, 100.0, 2.0),
+    executor: Executor | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> GnssaReplays:
+    """Read each GNSS-A file and replay it (:func:`replay_gnssa`, settings :func:`gnssa_replay_settings`)."""
+    speeds = survey_sound_speeds_mps(paths, sound_speeds_mps)
+    surveys = [read_gnssa(p) for p in paths]
+
+    def settings(records: RecordSet) -> ReplaySettings:
+        return gnssa_replay_settings(
+            records, epochs=epochs, step_m=step_m, reach_m=reach_m, max_yaw_rate_deg_s=max_yaw_rate_deg_s,
+            prior_sigma_enu_m=prior_sigma_enu_m,
+        )  # fmt: skip
+
+    kw = {"runs": runs, "seed": seed, "planners": planners, "executor": executor, "progress": progress}
+    replays = tuple(
+        replay_gnssa(survey, GnssaOptions(sound_speed_mps=c), settings=settings, **kw)
+        for survey, c in zip(surveys, speeds, strict=True)
+    )
+    return GnssaReplays(
+        replays=replays, runs=runs, seed=seed, planners=tuple(planners), epochs=epochs,
+        inputs=tuple(str(p) for p in paths),
+    )  # fmt: skip
+
+
+LogTruth = str | Path | BeaconTruth | Mapping[int, Sequence[float]]
+"""What ``replay logs`` measures errors against: ``"journal"`` (the journal's beacons, moved from its
+frame), ``"estimate"`` (the robust estimate over every range), a ``truth.json`` path of ``simulate
+logs``, or ``{beacon: (E, N, U)}`` in the frame of the origin used."""
+
+
+def _resolve_truth(truth: LogTruth, origin: EnuOrigin) -> tuple[dict[int, list[float]] | None, str]:
+    if isinstance(truth, BeaconTruth):
+        enu = truth.enu_in(origin)
+        return {b: list(map(float, v)) for b, v in enu.items()}, f"file {Path(truth.path or 'truth').name}"
+    if isinstance(truth, Mapping):
+        return {int(b): list(map(float, v)) for b, v in truth.items()}, "given"
+    if str(truth).lower() == "journal":
+        moved = journal_frame_to(origin, LOG_BEACONS_ENU_M)
+        return {b + 1: list(map(float, v)) for b, v in enumerate(moved)}, "journal"
+    if str(truth).lower() == "estimate":
+        return None, "estimate"
+    raise ConfigError(f"truth {truth!r}: expected journal, estimate, a truth file or positions per beacon")
+
+
+def replay_log_files(
+    gps: str | Path,
+    ranges: str | Path,
+    *,
+    truth: LogTruth = "journal",
+    origin: EnuOrigin | None = None,
+    tables: Sequence[str] = ("VII", "IX"),
+    runs: int = PAPER_RUNS,
+    seed: int = 2019,
+    planners: Sequence[str] = DEFAULT_PLANNERS,
+    epochs: int = 50,
+    speed_mps: float = 3.0,
+    reach_m: float = 10.0,
+    max_yaw_rate_deg_s: float = 30.0,
+    prior_sigma_enu_m: Sequence[float] = (100.0, 100.0, 2.0),
+    sigma_range_m: float = 1.006,
+    sound_speed_mps: float = 1500.0,
+    max_gap_s: float = 2.0,
+    executor: Executor | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> LogsReplay:
+    """Tables VII and IX on a GPS + USBL log pair (:func:`replay_logs`).
+
+    ENU from ``origin``, else the earliest fix (as every command on logs); the journal's start point
+    ``p_V(1)`` and, for ``truth="journal"``, its beacons are moved from the journal's frame to that one.
+    """
+    if sigma_range_m <= 0 or speed_mps <= 0 or reach_m <= 0:
+        raise ConfigError("--sigma-range, --speed and --reach must be positive")
+    if isinstance(truth, str | Path) and str(truth).lower() not in ("journal", "estimate"):
+        truth = read_truth(truth)  # a bad truth file fails before the work
+    logs = read_log_pair(gps, ranges, origin=origin, sound_speed_mps=sound_speed_mps, max_gap_s=max_gap_s)
+    truth_enu, source = _resolve_truth(truth, logs.origin)
+    settings = log_replay_settings(
+        epochs=epochs, start_enu_m=tuple(journal_frame_to(logs.origin, LOG_START_ENU_M)[0]),
+        speed_mps=speed_mps, reach_m=reach_m, max_yaw_rate_deg_s=max_yaw_rate_deg_s,
+        prior_sigma_enu_m=prior_sigma_enu_m,
+    )  # fmt: skip
+    result = replay_logs(
+        logs.aligned, truth_enu_m=truth_enu, tables=tables, runs=runs, seed=seed, planners=planners,
+        settings=settings, sigma_range_m=sigma_range_m, executor=executor, progress=progress,
+    )  # fmt: skip
+    inputs = (*logs.inputs, *([truth.path] if isinstance(truth, BeaconTruth) and truth.path else []))
+    return dataclasses.replace(
+        result, truth_source=source, logs=logs, runs=runs, seed=seed, planners=tuple(planners), inputs=inputs
+    )

@@ -5,20 +5,26 @@ pier (first a stationary segment for the noise analysis, then a random wander), 
 1 m correlated in time (first-order Gauss-Markov, 60 s), GPS at 1 Hz, ranges at 0.67 Hz alternating
 between beacons with 62 and 113 mm noise, a 0.2 m bias on beacon 1, dropouts, multipath outliers
 (+5 to +30 m) and a few corrupt lines.
+
+Beside the logs, ``truth.json`` holds the beacons' true positions (:class:`BeaconTruth`): ENU in the frame
+every command uses by default (origin at the earliest GPS fix written, so ``localize logs``, ``survey``
+and ``replay logs`` compare to it directly), latitude/longitude/height, the simulation's own origin and
+the seed. :func:`read_truth` reads it back.
 """
 
 from __future__ import annotations
 
 import datetime as dt
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.errors import ConfigError
-from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
-from oceanloc.io.nmea import format_gga, format_hdt, format_zda
+from oceanloc.errors import ConfigError, DataError
+from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
+from oceanloc.io.nmea import format_gga, format_hdt, format_zda, read_nmea
 from oceanloc.io.usbl import format_utc
 
 PIER_ORIGIN = EnuOrigin(lat_deg=32.705, lon_deg=-117.236, h_m=-1.478)
@@ -56,20 +62,141 @@ class PierLogSettings:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
+class BeaconTruth:
+    """True beacon positions of a simulated log pair.
+
+    Attributes
+    ----------
+    beacons : tuple of int
+        Beacon ids (1, 2, ...), as in the range log.
+    origin : EnuOrigin
+        Origin of :attr:`enu_m`: the earliest GPS fix of the log (the default origin of every command).
+    enu_m : (k, 3) float
+        Positions in that frame, metres.
+    geodetic : (k, 3) float
+        Latitude, longitude (degrees) and ellipsoidal height (metres).
+    simulation_origin : EnuOrigin or None
+        The frame the simulation was set up in (the journal's pier origin).
+    seed : int or None
+    path : str or None
+        The file it was read from.
+    """
+
+    beacons: tuple[int, ...]
+    origin: EnuOrigin
+    enu_m: FloatArray
+    geodetic: FloatArray
+    simulation_origin: EnuOrigin | None = None
+    seed: int | None = None
+    path: str | None = None
+
+    def enu_in(self, origin: EnuOrigin) -> dict[int, FloatArray]:
+        """The positions in the ENU frame of ``origin``, per beacon id, metres."""
+        g = self.geodetic
+        enu = geodetic_to_enu(g[:, 0], g[:, 1], g[:, 2], origin).reshape(-1, 3)
+        return {b: enu[i] for i, b in enumerate(self.beacons)}
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data (what :func:`read_truth` reads)."""
+        return {
+            "kind": "oceanloc beacon truth",
+            "origin": _origin_record(self.origin, "earliest GPS fix"),
+            "simulation_origin": None
+            if self.simulation_origin is None
+            else _origin_record(self.simulation_origin, "simulation frame"),
+            "seed": self.seed,
+            "beacons": [
+                {
+                    "beacon": int(b),
+                    "e_m": float(self.enu_m[i, 0]),
+                    "n_m": float(self.enu_m[i, 1]),
+                    "u_m": float(self.enu_m[i, 2]),
+                    "lat_deg": float(self.geodetic[i, 0]),
+                    "lon_deg": float(self.geodetic[i, 1]),
+                    "h_m": float(self.geodetic[i, 2]),
+                }
+                for i, b in enumerate(self.beacons)
+            ],
+        }
+
+
+def _origin_record(o: EnuOrigin, how: str) -> dict:
+    return {"lat_deg": o.lat_deg, "lon_deg": o.lon_deg, "h_m": o.h_m, "source": how}
+
+
+def read_truth(path: str | Path) -> BeaconTruth:
+    """Read a ``truth.json`` written by ``oceanloc simulate logs`` (:meth:`BeaconTruth.to_record`).
+
+    Raises
+    ------
+    DataError
+        If the file cannot be read or is not such a file.
+    """
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+        o = data["origin"]
+        rows = data["beacons"]
+        origin = EnuOrigin(lat_deg=float(o["lat_deg"]), lon_deg=float(o["lon_deg"]), h_m=float(o["h_m"]))
+        beacons = tuple(int(r["beacon"]) for r in rows)
+        geo = np.array([[r["lat_deg"], r["lon_deg"], r["h_m"]] for r in rows], dtype=float).reshape(-1, 3)
+        enu = np.array([[r["e_m"], r["n_m"], r["u_m"]] for r in rows], dtype=float).reshape(-1, 3)
+        so = data.get("simulation_origin")
+        sim = None if so is None else EnuOrigin(lat_deg=so["lat_deg"], lon_deg=so["lon_deg"], h_m=so["h_m"])
+    except OSError as exc:
+        raise DataError(f"{p}: cannot read the truth file ({exc.strerror or exc})") from None
+    except (ValueError, KeyError, TypeError) as exc:
+        raise DataError(f"{p}: not a beacon truth file of oceanloc simulate logs ({exc!r})") from None
+    if not beacons:
+        raise DataError(f"{p}: the truth file lists no beacon")
+    seed = data.get("seed")
+    return BeaconTruth(
+        beacons=beacons, origin=origin, enu_m=enu, geodetic=geo, simulation_origin=sim,
+        seed=seed if isinstance(seed, int) else None, path=str(p),
+    )  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
 class PierLogs:
-    """What was written, with the truth for checks."""
+    """What was written, with the truth for checks (:attr:`truth`, also written to ``truth.json``)."""
 
     nmea_path: Path
     ranges_path: Path
+    truth_path: Path
     beacons_enu_m: FloatArray
+    truth: BeaconTruth
     n_fixes: int
     n_ranges: int
     n_outliers: int
     n_corrupt: int
 
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: the files written, their counts and the truth."""
+        return {
+            "gps": str(self.nmea_path),
+            "ranges": str(self.ranges_path),
+            "truth": str(self.truth_path),
+            "fixes": self.n_fixes,
+            "ranges_written": self.n_ranges,
+            "outliers": self.n_outliers,
+            "corrupt_lines": self.n_corrupt,
+            "beacons": self.truth.to_record()["beacons"],
+        }
 
-def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.Generator) -> PierLogs:
-    """Write ``gps.nmea`` and ``ranges.csv`` into ``out_dir``; see the module docstring."""
+
+def simulate_pier_logs(
+    out_dir: Path,
+    settings: PierLogSettings,
+    rng: np.random.Generator,
+    *,
+    origin: EnuOrigin = PIER_ORIGIN,
+    seed: int | None = None,
+) -> PierLogs:
+    """Write ``gps.nmea``, ``ranges.csv`` and ``truth.json`` into ``out_dir``; see the module docstring.
+
+    ``origin`` places the experiment on the Earth (the journal's pier by default; the beacons' ENU
+    positions of ``settings`` are in its frame); ``seed`` is recorded in the truth file.
+    """
     s = settings
     beacons = np.asarray(s.beacons_enu_m, dtype=float)
     n_gps = int(s.duration_s * s.gps_rate_hz)
@@ -100,7 +227,7 @@ def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.
     for k in range(1, n_gps):
         err[k] = phi * err[k - 1] + drive[k]
     err[:, 2] *= 0.5
-    geo = enu_to_geodetic(pos + err, PIER_ORIGIN)
+    geo = enu_to_geodetic(pos + err, origin)
     start_t = s.start_utc
     lines: list[str] = []
     for k in range(n_gps):
@@ -142,9 +269,28 @@ def simulate_pier_logs(out_dir: Path, settings: PierLogSettings, rng: np.random.
     ranges_path = out_dir / "ranges.csv"
     nmea_path.write_text("\r\n".join(lines) + "\r\n", encoding="ascii")
     ranges_path.write_text("\n".join(csv) + "\n", encoding="ascii")
+    # the default frame of every command: origin at the earliest fix as read back (GPS error and the
+    # NMEA rounding included), so the truth is in exactly the frame `localize logs` reports in
+    fixes = read_nmea(nmea_path)
+    first = EnuOrigin(
+        lat_deg=float(fixes.lat_deg[0]), lon_deg=float(fixes.lon_deg[0]), h_m=float(fixes.h_m[0])
+    )
+    beacons_geo = enu_to_geodetic(beacons, origin).reshape(-1, 3)
+    truth = BeaconTruth(
+        beacons=tuple(range(1, beacons.shape[0] + 1)),
+        origin=first,
+        enu_m=geodetic_to_enu(beacons_geo[:, 0], beacons_geo[:, 1], beacons_geo[:, 2], first).reshape(-1, 3),
+        geodetic=beacons_geo,
+        simulation_origin=origin,
+        seed=seed,
+    )
+    truth_path = out_dir / "truth.json"
+    truth_path.write_text(json.dumps(truth.to_record(), indent=2) + "\n", encoding="utf-8")
     return PierLogs(
         nmea_path=nmea_path,
         ranges_path=ranges_path,
+        truth_path=truth_path,
+        truth=truth,
         beacons_enu_m=beacons,
         n_fixes=n_gps,
         n_ranges=int(keep.sum()),

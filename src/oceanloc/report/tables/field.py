@@ -1,0 +1,327 @@
+"""Terminal tables (rich) for field data: GNSS-A surveys, localized GPS + range logs, range noise, the
+survey journal's estimates and next waypoint.
+
+Every numeric column header states its unit; text that comes from a user (file names, survey names) is
+escaped; each table fits 100 columns. Bearings and headings are degrees clockwise from true north.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from rich import box
+from rich.markup import escape
+from rich.table import Table
+
+from oceanloc.config.survey_journal import JournalSettings
+from oceanloc.estimation.gnssa import GnssaResult, gnssa_epoch_utc
+from oceanloc.field.gnssa_surveys import GnssaSurveys
+from oceanloc.field.range_logs import LogLocalization, NoiseAnalysis
+from oceanloc.field.repeatability import SurveySpread
+from oceanloc.field.survey_journal import MIN_RANGES, RANGE_STATUS, JournalStatus, SurveyEstimates, Waypoint
+from oceanloc.geo.enu import EnuOrigin
+from oceanloc.geo.plate_motion import SECONDS_PER_YEAR
+from oceanloc.io.usbl import format_utc
+from oceanloc.planning.site_planners import parse_site_planner, site_planner_label
+from oceanloc.sim.logs import BeaconTruth
+from oceanloc.units import DEG
+
+_MM_YR = 1e3 * SECONDS_PER_YEAR
+
+
+def _table(title: str) -> Table:
+    """A compact table (rules under the header only) so wide rows fit 100 columns."""
+    return Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True)
+
+
+def origin_text(origin: EnuOrigin, how: str = "") -> str:
+    """``32.7050000, -117.2360000, -1.478 m`` (latitude, longitude in degrees, height in metres), with how
+    it was chosen in parentheses."""
+    text = f"{origin.lat_deg:.7f}, {origin.lon_deg:.7f}, {origin.h_m:.3f} m"
+    return f"{text} ({how})" if how else text
+
+
+def _survey_name(name: str) -> str:
+    return escape(name.removeprefix("gnssa_data_"))
+
+
+def gnssa_positions_table(results: Sequence[GnssaResult]) -> Table:
+    """Transponder positions in each file's topocentric frame, their 1-sigma and ping counts."""
+    table = _table("GNSS-A transponder positions (file frame)")
+    for col in ("survey", "E m", "N m", "U m", "1σ E/N/U cm", "used/excl", "RMS cm"):
+        table.add_column(col, justify="left" if col == "survey" else "right")
+    for r in results:
+        e, n, u = r.position_enu_m
+        se, sn, su = 100.0 * r.sigma_enu_m
+        table.add_row(
+            _survey_name(r.name),
+            f"{e:+.3f}",
+            f"{n:+.3f}",
+            f"{u:+.3f}",
+            f"{se:.1f}/{sn:.1f}/{su:.1f}",
+            f"{r.pings_used}/{len(r.exclusions)}",
+            f"{100 * r.residual_rms_m:.1f}",
+        )
+    return table
+
+
+def gnssa_acoustic_table(results: Sequence[GnssaResult]) -> Table:
+    """The estimated acoustic model of each survey (sound speed, its gradient, refraction, noise)."""
+    table = _table("Acoustic model (estimated)")
+    for col in ("survey", "c m/s", "dc/dE, dc/dN m/s/km", "κ ppm", "σ path cm", "β cm/tan"):
+        table.add_column(col, justify="left" if col == "survey" else "right")
+    for r in results:
+        # a relative slowness gradient g per km is a speed gradient of -g c per km
+        dc = -r.gradient_per_km * r.sound_speed_mps
+        table.add_row(
+            _survey_name(r.name),
+            f"{r.sound_speed_mps:.1f}",
+            f"{dc[0]:+.2f}, {dc[1]:+.2f}",
+            f"{r.refraction_ppm:.1f}",
+            f"{100 * r.sigma_path_m:.1f}",
+            f"{100 * r.beta_m:.2f}",
+        )
+    return table
+
+
+def gnssa_geodetic_table(results: Sequence[GnssaResult]) -> Table | None:
+    """Positions as latitude, longitude and ellipsoidal height (None when no file has a header origin)."""
+    table = _table("As latitude, longitude, ellipsoidal height (WGS84)")
+    for col in ("survey", "epoch UTC", "latitude deg", "longitude deg", "height m"):
+        table.add_column(col, justify="left" if col == "survey" else "right")
+    for r in results:
+        if r.position_geodetic is not None:
+            lat, lon, h = r.position_geodetic
+            table.add_row(
+                _survey_name(r.name), gnssa_epoch_utc(r.epoch_s)[:16], f"{lat:.8f}", f"{lon:.8f}", f"{h:.3f}"
+            )
+    return table if table.row_count else None
+
+
+def gnssa_tables(results: Sequence[GnssaResult]) -> list[Table]:
+    """The per-survey tables of ``localize gnssa``: positions, acoustic model, latitude/longitude."""
+    geo = gnssa_geodetic_table(results)
+    return [gnssa_positions_table(results), gnssa_acoustic_table(results), *([geo] if geo else [])]
+
+
+def gnssa_spread_table(spread: SurveySpread, targets_enu_m: Sequence[float] | None = None) -> Table:
+    """Spread across surveys per axis, what the sigmas predict and the chi-square test; with
+    ``targets_enu_m`` (E, N, U in metres) a target column and whether it is met."""
+    title = f"Spread across {spread.n_surveys} surveys"
+    if spread.velocity is not None:
+        v = spread.velocity.velocity_enu_mm_yr
+        title += (
+            f", moved to {gnssa_epoch_utc(spread.reference_epoch_s)[:10]} by the site velocity"
+            f" ({escape(spread.velocity.source)}: E {v[0]:+.1f}, N {v[1]:+.1f} mm/yr)"
+        )
+    else:
+        title += ", as surveyed"
+    table = _table(title)
+    cols = ["axis", "std cm", "RMS σ cm", "chi2", "chi2 95% range", "σ explain"]
+    if targets_enu_m is not None:
+        cols += ["target cm", "met"]
+    for col in cols:
+        table.add_column(col, justify="right")
+    lo, hi = spread.chi2_bounds
+    ok = spread.sigmas_explain_spread
+    for j, axis in enumerate("ENU"):
+        cells = [
+            axis,
+            f"{100 * spread.std_enu_m[j]:.1f}",
+            f"{100 * spread.rms_sigma_enu_m[j]:.1f}",
+            f"{spread.chi2_enu[j]:.1f}",
+            f"{lo:.1f}-{hi:.1f}",
+            "yes" if ok[j] else "no",
+        ]
+        if targets_enu_m is not None:
+            target = float(targets_enu_m[j])
+            cells += [f"{100 * target:.1f}", "yes" if spread.std_enu_m[j] <= target else "no"]
+        table.add_row(*cells)
+    return table
+
+
+def gnssa_spread_lines(surveys: GnssaSurveys) -> list[str]:
+    """Plain lines under the spread table: how the site velocity was chosen, the spread as surveyed and
+    the velocity the surveys imply."""
+    lines = [f"site velocity ({escape(surveys.site_velocity.spec)}): {escape(surveys.site_velocity.reason)}"]
+    raw, spread = surveys.as_surveyed, surveys.spread
+    if raw is not None and spread is not None and spread.velocity is not None:
+        s, c = 100 * raw.std_enu_m, raw.chi2_enu
+        lines.append(
+            f"as surveyed (no site velocity): std E/N/U {s[0]:.1f}/{s[1]:.1f}/{s[2]:.1f} cm, "
+            f"chi2 {c[0]:.1f}/{c[1]:.1f}/{c[2]:.1f}"
+        )
+    if spread is not None and spread.fitted_velocity_enu_mps is not None:
+        fit = spread.fitted_velocity_enu_mps * _MM_YR
+        sig = np.asarray(spread.fitted_velocity_sigma_enu_mps) * _MM_YR
+        lines.append(
+            f"velocity the surveys imply (weighted fit): E {fit[0]:+.0f} ± {sig[0]:.0f}, "
+            f"N {fit[1]:+.0f} ± {sig[1]:.0f}, U {fit[2]:+.0f} ± {sig[2]:.0f} mm/yr"
+        )
+    return lines
+
+
+def beacons_table(loc: LogLocalization) -> Table:
+    """``localize logs``: each beacon's ENU position (from the origin in the title), 1-sigma, latitude and
+    longitude, ranges used and excluded; with a truth file, the distance to the true position."""
+    how = loc.logs.origin_source
+    table = _table(f"Beacons, ENU from {origin_text(loc.logs.origin, how)}")
+    cols = ["beacon", "E m", "N m", "U m", "1σ E/N/U m", "lat deg", "lon deg", "used/excl", "RMS m"]
+    if loc.truth_enu_m is not None:
+        cols.append("error m")
+    for col in cols:
+        table.add_column(col, justify="right")
+    for i, e in enumerate(loc.estimates):
+        sig = np.sqrt(np.diag(e.covariance_m2))
+        cells = [
+            str(e.beacon),
+            *(f"{v:+.2f}" for v in e.position_enu_m),
+            "/".join(f"{v:.2f}" for v in sig),
+            f"{loc.geodetic[i, 0]:.6f}",
+            f"{loc.geodetic[i, 1]:.6f}",
+            f"{int(e.used.sum())}/{e.n_excluded}",
+            f"{e.residual_rms_m:.2f}",
+        ]
+        if loc.truth_enu_m is not None:
+            err = loc.error_m(i)
+            cells.append("-" if err is None else f"{err:.2f}")
+        table.add_row(*cells)
+    return table
+
+
+def range_noise_table(noise: NoiseAnalysis) -> Table:
+    """``localize noise``: eq. (30) per beacon and stationary segment (times from the first range)."""
+    table = _table("Range noise on stationary segments (eq. 30)")
+    for col in ("beacon", "segment s", "ranges", "outliers", "range m", "σ mm", "± mm"):
+        table.add_column(col, justify="right")
+    t0 = noise.t0_unix_s
+    for e in noise.estimates:
+        table.add_row(
+            str(e.beacon),
+            f"{e.t_start_s - t0:.0f}-{e.t_end_s - t0:.0f}",
+            str(e.n_ranges),
+            str(e.n_outliers),
+            f"{e.running.final_range_m:.3f}",
+            f"{1e3 * e.sigma_m:.0f}",
+            f"{1e3 * e.sigma_se_m:.0f}",
+        )
+    return table
+
+
+def range_noise_line(noise: NoiseAnalysis) -> str:
+    """The total range sigma the noise analysis recommends (journal VI-B)."""
+    return (
+        f"sigma_USBL = max over beacons = {1e3 * noise.sigma_usbl_m:.0f} mm; with sigma_GPS = "
+        f"{noise.sigma_gps_m:g} m the total range sigma is {noise.sigma_total_m:.3f} m (journal VI-B); "
+        "use it as --sigma-range"
+    )
+
+
+def truth_table(truth: BeaconTruth) -> Table:
+    """``simulate logs``: the beacons' true positions, ENU from the earliest fix (the default origin of
+    ``localize logs``, ``survey`` and ``replay logs``) and as latitude, longitude, height."""
+    table = _table(f"True beacons, ENU from {origin_text(truth.origin, 'earliest fix')}")
+    for col in ("beacon", "E m", "N m", "U m", "lat deg", "lon deg", "h m"):
+        table.add_column(col, justify="right")
+    for i, b in enumerate(truth.beacons):
+        e, n, u = truth.enu_m[i]
+        lat, lon, h = truth.geodetic[i]
+        table.add_row(str(b), f"{e:+.2f}", f"{n:+.2f}", f"{u:+.2f}", f"{lat:.7f}", f"{lon:.7f}", f"{h:.2f}")
+    return table
+
+
+def journal_settings_text(s: JournalSettings) -> str:
+    """One line describing a survey's settings: planner (its one label), reach or vehicle, sigma, origin,
+    beacons."""
+    p = s.planner
+    plan = site_planner_label(p)
+    if p.kind in ("lookahead", "random-yaw"):
+        plan += f", w_max {s.max_yaw_rate_rad_s / DEG:g} deg/s, {s.speed_mps:g} m/s, T {s.period_s:g} s"
+    else:
+        plan += f", d_max {p.max_distance_m:g} m"
+    origin = "earliest fix" if s.origin is None else origin_text(s.origin, "given")
+    beacons = ", ".join(map(str, s.beacons)) or "any"
+    return escape(f"planner {plan}; sigma {s.sigma_range_m:g} m; origin {origin}; beacons {beacons}")
+
+
+def journal_status_lines(st: JournalStatus) -> list[str]:
+    """``survey status``: the journal, its settings, and its records' counts and time span."""
+    rec = st.records
+    span = (
+        f", {format_utc(float(rec.fix_t_unix_s[0]))} to {format_utc(float(rec.fix_t_unix_s[-1]))}"
+        if rec.n_fixes
+        else ""
+    )
+    return [
+        f"survey {escape(st.path)}: {journal_settings_text(st.settings)}",
+        f"{rec.n_fixes} fixes{span}, {rec.heading_deg.size} headings, {rec.n_ranges} ranges",
+    ]
+
+
+def journal_estimates_table(est: SurveyEstimates, origin_source: str = "") -> Table:
+    """``survey status``: per beacon the estimate (ENU and latitude/longitude), 1-sigma, 95 % ellipse
+    semi-axes and the major axis' azimuth (clockwise from north), ranges used and excluded."""
+    table = _table(f"Beacons, ENU from {origin_text(est.origin, origin_source)}")
+    table.caption = "95% a/b: ellipse semi-axes; az: its major axis, clockwise from true north"
+    cols = ("beacon", "E m", "N m", "U m", "lat deg", "lon deg", "1σ E/N/U m", "95% a/b m", "az deg")
+    cols = (*cols, "used/excl")
+    for col in cols:
+        table.add_column(col, justify="right")
+    for i, b in enumerate(est.beacons):
+        table.add_row(
+            str(b),
+            *(f"{v:+.2f}" for v in est.positions_enu_m[i]),
+            f"{est.positions_geodetic[i, 0]:.6f}",
+            f"{est.positions_geodetic[i, 1]:.6f}",
+            "/".join(f"{v:.2f}" for v in est.sigma_enu_m[i]),
+            f"{est.ellipses.semi_major_m[i]:.2f}/{est.ellipses.semi_minor_m[i]:.2f}",
+            f"{est.ellipse_azimuth_deg[i]:.0f}",
+            f"{est.ranges_used[i]}/{est.ranges_excluded[i]}",
+        )
+    return table
+
+
+def journal_range_lines(est: SurveyEstimates) -> list[str]:
+    """The ranges' status counts and the beacons still waiting for ranges."""
+    counts = np.bincount(est.range_status, minlength=len(RANGE_STATUS))
+    lines = ["ranges: " + ", ".join(f"{c} {label}" for label, c in zip(RANGE_STATUS, counts, strict=True))]
+    lines += [
+        f"beacon {b}: {c} ranges with GPS, needs {MIN_RANGES}"
+        for b, c in zip(est.waiting_beacons, est.waiting_ranges, strict=True)
+    ]
+    return lines
+
+
+def waypoint_table(w: Waypoint) -> Table:
+    """``survey next``: the start and every planned site, ENU and latitude/longitude, with the heading of
+    each leg (degrees clockwise from true north)."""
+    label = site_planner_label(parse_site_planner(w.planner))
+    title = f"Next waypoint ({label}, from the fix of {format_utc(w.from_t_unix_s)})"
+    if w.origin is not None:
+        title += f", ENU from {origin_text(w.origin)}"
+    table = _table(title)
+    for col in ("site", "E m", "N m", "U m", "lat deg", "lon deg", "heading deg"):
+        table.add_column(col, justify="right")
+    e, n, u = w.from_enu_m
+    now = "" if w.from_heading_deg is None else f"{w.from_heading_deg:.1f} ({w.heading_source})"
+    table.add_row("now", f"{e:+.2f}", f"{n:+.2f}", f"{u:+.2f}", "", "", now)
+    headings = w.planned_headings_deg
+    for i, (p, g) in enumerate(zip(w.waypoints_enu_m, w.waypoints_geodetic, strict=True)):
+        table.add_row(
+            "next" if i == 0 else f"+{i + 1}",
+            *(f"{v:+.2f}" for v in p),
+            f"{g[0]:.7f}",
+            f"{g[1]:.7f}",
+            f"{headings[i]:.1f}",
+        )
+    return table
+
+
+def waypoint_line(w: Waypoint) -> str:
+    """Where to go: distance, bearing (clockwise from true north), position and information gain."""
+    return (
+        f"go {w.distance_m:.2f} m on bearing {w.bearing_deg:.1f} deg (clockwise from true north) to "
+        f"{w.next_geodetic[0]:.7f}, {w.next_geodetic[1]:.7f}; expected information gain "
+        f"{w.objective_nats:.4f} nats over beacons {', '.join(map(str, w.beacons))}"
+    )

@@ -1,0 +1,71 @@
+import dataclasses
+
+import numpy as np
+import pytest
+from rich.console import Console
+
+from oceanloc.estimation.gnssa import GnssaOptions
+from oceanloc.field.gnssa_surveys import process_gnssa_surveys
+from oceanloc.io.gnssa import lajolla_paths
+from oceanloc.report.tables import field as tables
+
+
+def _render(table) -> str:
+    console = Console(record=True, width=100)
+    console.print(table)
+    return console.export_text()
+
+
+@pytest.fixture(scope="module")
+def two_surveys():
+    return process_gnssa_surveys(lajolla_paths()[3:5], GnssaOptions())
+
+
+def test_gnssa_tables_state_units_fit_100_columns_and_escape_names(two_surveys):
+    evil = dataclasses.replace(two_surveys.results[0], name="[/x][bold]mine")
+    texts = [_render(t) for t in tables.gnssa_tables([evil, two_surveys.results[1]])]
+    positions, acoustic, geodetic = texts
+    for header in ("E m", "N m", "U m", "1σ E/N/U cm", "RMS cm"):
+        assert header in positions
+    for header in ("c m/s", "dc/dE, dc/dN m/s/km", "κ ppm", "σ path cm", "β cm/tan"):
+        assert header in acoustic
+    assert "latitude deg" in geodetic and "2022-03-21T" in geodetic
+    assert "[/x][bold]mine" in positions  # escaped: printed as written, no markup error
+    assert all(len(line) <= 100 for text in texts for line in text.splitlines())
+    assert "…" not in "".join(texts)  # no column squeezed
+
+
+def test_spread_table_has_units_targets_and_the_velocity_line(two_surveys):
+    text = _render(tables.gnssa_spread_table(two_surveys.spread, [0.025, 0.035, 0.06]))
+    assert "Spread across 2 surveys, moved to" in " ".join(text.split())
+    assert "ITRF2014 PCFC: E -44.0, N +26.0 mm/yr" in " ".join(text.split())
+    for header in ("std cm", "RMS σ cm", "target cm", "met"):
+        assert header in text
+    assert [line.split()[0] for line in text.splitlines() if line.split()[:1] in (["E"], ["N"], ["U"])] == [
+        "E",
+        "N",
+        "U",
+    ]
+    lines = tables.gnssa_spread_lines(two_surveys)
+    assert lines[0] == "site velocity (auto): header Lat0 32.8668, Lon0 -117.2701 is on PCFC"
+    assert lines[1].startswith("as surveyed (no site velocity): std E/N/U")
+
+
+def test_log_tables_fit_100_columns_with_units_and_the_origin(tmp_path):
+    from oceanloc.field.range_logs import localize_log_files, range_noise_files
+    from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
+
+    logs = simulate_pier_logs(tmp_path, PierLogSettings(duration_s=600.0), np.random.default_rng(5), seed=5)
+    loc = localize_log_files(logs.nmea_path, logs.ranges_path, truth=logs.truth_path)
+    text = _render(tables.beacons_table(loc))
+    assert "ENU from" in text and "(earliest fix)" in text
+    for header in ("E m", "N m", "U m", "1σ E/N/U m", "lat deg", "lon deg", "RMS m", "error m"):
+        assert header in text
+    assert all(len(line) <= 100 for line in text.splitlines()) and "…" not in text
+    truth = _render(tables.truth_table(logs.truth))
+    assert "True beacons, ENU from" in " ".join(truth.split()) and "h m" in truth
+    noise = range_noise_files(logs.nmea_path, logs.ranges_path)
+    text = _render(tables.range_noise_table(noise))
+    for header in ("segment s", "range m", "σ mm", "± mm"):
+        assert header in text
+    assert "use it as --sigma-range" in tables.range_noise_line(noise)
