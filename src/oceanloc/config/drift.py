@@ -34,6 +34,9 @@ and the path-following trial::
     start_m = [-4000.0, 4000.0]
     goal_m = [3000.0, -3000.0]
     goal_tolerance_m = 100.0
+    start_time_s = 0.0             # start time in the field's clock (s; a double gyre's phase, or
+                                   # seconds after a netcdf product's first slice); netcdf may give
+    # start_time = "2024-01-01T06:00:00" instead (ISO 8601, within the product's time axis)
 
     [vehicle]                      # Table 1 and (IV.14)
     flight_power_w = 200.0
@@ -81,6 +84,7 @@ from oceanloc.models.currents import (
     UniformCurrent,
     VortexCurrent,
     thesis_vortex_grid,
+    time_span_s,
 )
 from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
 from oceanloc.models.drift import METHODS, Method
@@ -153,6 +157,8 @@ class DriftScenario:
     flights_avoid_obstacles : bool
     start_m, goal_m : (2,) float
     goal_tolerance_m : float
+    start_time_s : float
+        Start time in the current's clock, seconds (every drift leg is integrated from its own start time).
     energy : EnergyBudget
     max_leg_m : float or None
         Longest flight leg (one hop) or ``None`` for flights of any length.
@@ -186,6 +192,7 @@ class DriftScenario:
     start_m: np.ndarray
     goal_m: np.ndarray
     goal_tolerance_m: float = 100.0
+    start_time_s: float = 0.0
     energy: EnergyBudget = field(default_factory=EnergyBudget)
     max_leg_m: float | None = None
     hdop_others_m: np.ndarray | None = None
@@ -228,6 +235,7 @@ class CurrentSettings:
     description: str
     land: OccupancyGrid | None = None
     data_files: tuple[str, ...] = ()
+    time_origin: str | None = None
 
 
 def _currents(t: Table, base_dir: Path) -> CurrentSettings:
@@ -295,6 +303,7 @@ def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
         description=product.description,
         land=land_obstacles(product.field),
         data_files=(str(path),),
+        time_origin=product.time_origin,
     )
 
 
@@ -389,14 +398,61 @@ class RouteSettings:
     start_m: np.ndarray
     goal_m: np.ndarray
     goal_tolerance_m: float
+    start_time_s: float = 0.0
 
 
-def _route(t: Table) -> RouteSettings:
+MAX_START_TIME_S = 1e10
+"""Largest start time accepted, seconds (about 300 years: any clock of a field)."""
+
+
+def _start_time(t: Table, currents: CurrentSettings, horizon_s: float) -> float:
+    """``start_time_s`` (seconds in the field's clock) or ``start_time`` (ISO 8601, gridded products).
+
+    For a field with a time axis the start must lie within it and the horizon must end by its last slice
+    (beyond it the current is unknown); the error gives the allowed range.
+    """
+    if t.has("start_time") and t.has("start_time_s"):
+        raise t.error("start_time", "give start_time or start_time_s, not both")
+    if t.has("start_time"):
+        text = t.str("start_time")
+        if currents.time_origin is None:
+            raise t.error("start_time", "needs a current product with a time axis; use start_time_s")
+        try:
+            when = np.datetime64(text.strip().rstrip("Z"), "s")
+        except ValueError:
+            raise t.error(
+                "start_time", f"must be an ISO 8601 time such as 2024-01-01T06:00:00, got {text!r}"
+            ) from None
+        t0 = float((when - np.datetime64(currents.time_origin, "s")) / np.timedelta64(1, "s"))
+        key = "start_time"
+    else:
+        t0 = t.float("start_time_s", 0.0, lo=-MAX_START_TIME_S, hi=MAX_START_TIME_S)
+        key = "start_time_s"
+    span = time_span_s(currents.field)
+    if span is not None:
+        first, last = span
+        if not first <= t0 < last:
+            origin = f" after {currents.time_origin}" if currents.time_origin else ""
+            raise t.error(
+                key, f"must lie within the current's time axis, [{first:g}, {last:g}) s{origin}; got {t0:g} s"
+            )
+        if t0 + horizon_s > last:
+            raise t.error(
+                key,
+                f"the drift horizon ({horizon_s / 3600:g} h) would run past the current's last time slice "
+                f"({last:g} s); start by {last - horizon_s:g} s or shorten [drift] horizon_h to at most "
+                f"{(last - t0) / 3600:g} h",
+            )
+    return t0
+
+
+def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettings:
     start = t.vector("start_m", 2)
     goal = t.vector("goal_m", 2)
     tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True)
+    t0 = _start_time(t, currents, horizon_s)
     t.check_unknown()
-    return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol)
+    return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol, start_time_s=t0)
 
 
 def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None:
@@ -503,7 +559,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     drift = _drift_settings(root.table("drift", required=False))
     map_ = _map_settings(root.table("map", required=False), currents)
     route_t = root.table("route")
-    route = _route(route_t)
+    route = _route(route_t, currents, drift.horizon_s)
     vehicle = _vehicle(root.table("vehicle", required=False))
     hdop = _hdop(root.table("hdop", required=False))
     planner = _planner_settings(root.table("planner", required=False))
@@ -522,6 +578,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         start_m=route.start_m,
         goal_m=route.goal_m,
         goal_tolerance_m=route.goal_tolerance_m,
+        start_time_s=route.start_time_s,
         energy=vehicle.energy,
         max_leg_m=vehicle.max_leg_m,
         hdop_others_m=hdop.others_m,
@@ -554,4 +611,5 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
         horizon_s=scenario.horizon_s,
         max_leg_m=scenario.max_leg_m,
         time_weight_wh_per_h=scenario.time_weight_wh_per_h,
+        t0_s=scenario.start_time_s,
     )

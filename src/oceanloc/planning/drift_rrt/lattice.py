@@ -24,8 +24,14 @@ point with ``V = 0``). This module solves it on a lattice of landing points ``q`
 
 Every plan is re-simulated step by step with the propagator: its energy is exact for the problem's dynamics,
 and only its optimality depends on the lattice. Flights go straight; with ``problem.max_leg_m`` they are
-made of legs of at most that length landing on free lattice nodes. The field is taken as steady: every
-trajectory is integrated from the problem's start time.
+made of legs of at most that length landing on free lattice nodes.
+
+In a time-varying field (:func:`oceanloc.models.currents.is_steady` false: a double gyre with
+``epsilon > 0``, a gridded product with a time axis) the lattice values are computed from the problem's
+start time and only rank the landing points: the plan is read out in time (every leg's drift is integrated
+from the time the vehicle lands, :func:`~.lattice_values.extract_in_time`), the steady-field refinement is
+skipped, and the path is rebuilt by :func:`~.resimulate.resimulate_plan`, so the reported energy is what the
+plan costs when flown.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import time
 import numpy as np
 
 from oceanloc._typing import FloatArray
+from oceanloc.models.currents import is_steady
 from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.lattice_refine import refine_plan
 from oceanloc.planning.drift_rrt.lattice_values import (
@@ -44,11 +51,13 @@ from oceanloc.planning.drift_rrt.lattice_values import (
     Leg,
     SampledDrift,
     ValueLattice,
+    extract_in_time,
     extract_plan,
     legs_objective,
     sample_drift,
 )
 from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget, PlanStatus
+from oceanloc.planning.drift_rrt.resimulate import resimulate_plan
 
 __all__ = ["EnvelopeKind", "LatticeOptions", "objective", "plan_lattice"]
 
@@ -59,13 +68,15 @@ def _build_path(problem: DriftProblem, legs: list[Leg]) -> DriftPath:
     pos = problem.start_m
     segments: list[tuple[FloatArray, bool]] = []
     for leg in legs:
-        drift = prop.drift_polyline(space, pos, leg.drift_steps, t0_s=problem.t0_s)
+        # Each leg drifts from its own start time (the clock runs through drifts and flights).
+        drift = prop.drift_polyline(space, pos, leg.drift_steps, t0_s=t)
         segments.append((drift, False))
         pos = drift[-1]
         t += prop.dt_s * (drift.shape[0] - 1)
         if leg.landing is None:
             break
         segments.append((np.vstack([pos, leg.landing]), True))
+        t += float(np.linalg.norm(np.asarray(leg.landing) - pos)) / problem.energy.flight_speed_mps
         pos = np.asarray(leg.landing, dtype=float)
         if leg.to_goal:
             break
@@ -117,7 +128,11 @@ def plan_lattice(
     traj = sample_drift(problem, points, opts.stride)
     lattice.solve(traj)
     start = points.shape[0] - 1
-    legs = extract_plan(lattice, traj, start, traj, opts.max_flights)
+    steady = is_steady(problem.propagator.field)
+    if steady:
+        legs = extract_plan(lattice, traj, start, traj, opts.max_flights)
+    else:
+        legs = extract_in_time(lattice, opts.max_flights)
     if legs is None:
         return DriftPlanResult(
             status=PlanStatus.FAILED,
@@ -139,7 +154,7 @@ def plan_lattice(
     )
     best_cost = legs_objective(problem, legs)
     extent = opts.spacing_m
-    for _ in range(opts.refine_rounds):
+    for _ in range(opts.refine_rounds if steady else 0):
         refined = refine_plan(lattice, problem, start_traj, traj, legs, opts, extent)
         extent /= 4.0
         if refined is None:
@@ -148,6 +163,9 @@ def plan_lattice(
         if cost < best_cost - 1e-9:
             legs, best_cost = refined, cost
     best_path = _build_path(problem, legs)
+    if not steady:
+        # Merging flights changes the clock of what follows: the path is the one flown.
+        best_path = resimulate_plan(problem, best_path).path
     ok = _reaches(problem, best_path)
     energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
     return DriftPlanResult(

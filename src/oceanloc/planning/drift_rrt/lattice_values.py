@@ -104,7 +104,10 @@ def legs_objective(problem: DriftProblem, legs: list[Leg]) -> float:
     return float(problem.energy.flight_energy_wh(flown)) + problem.time_weight_wh_per_h * hours
 
 
-def sample_drift(problem: DriftProblem, points: FloatArray, stride: int) -> SampledDrift:
+def sample_drift(
+    problem: DriftProblem, points: FloatArray, stride: int, t0_s: float | None = None
+) -> SampledDrift:
+    """Drift ``(P, 2)`` points from ``t0_s`` (the problem's start time by default) over the horizon."""
     roll = problem.propagator.rollout(
         problem.space,
         points,
@@ -112,7 +115,7 @@ def sample_drift(problem: DriftProblem, points: FloatArray, stride: int) -> Samp
         goal_m=problem.goal_m,
         goal_tolerance_m=problem.goal_tolerance_m,
         stride=stride,
-        t0_s=problem.t0_s,
+        t0_s=problem.t0_s if t0_s is None else t0_s,
     )
     samples = np.concatenate([roll.samples_m, roll.closest_m[None]], axis=0)
     n = points.shape[0]
@@ -389,6 +392,49 @@ def extract_plan(
         finish = float(node_traj.finish[p])
         goal_step = int(node_traj.goal_step[p])
     return finish_direct(lattice, legs, samples, steps)
+
+
+def extract_in_time(lattice: ValueLattice, max_flights: int) -> list[Leg] | None:
+    """Greedy extraction for a time-varying field: every leg drifts from its own start time.
+
+    The lattice values (computed from the start time) only rank the landing points; the drift from each
+    landing is integrated afresh from the time the vehicle lands there (start time plus the drift and
+    flight time so far), so the take-off points are those of the flown path.
+    """
+    problem = lattice.problem
+    dt, speed = problem.propagator.dt_s, problem.energy.flight_speed_mps
+    pos = problem.start_m
+    t = problem.t0_s
+    legs: list[Leg] = []
+    promised = math.inf
+    samples = steps = None
+    for _ in range(max_flights):
+        traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
+        samples = traj.samples[:, 0].copy()
+        steps = traj.steps[:, 0]
+        if legs and not math.isfinite(lattice.leg):
+            samples[0] = np.nan
+        v, s, j = lattice.best_takeoff(samples, traj.time_cost[:, 0], traj.goal_cost[:, 0])
+        if float(traj.finish[0]) <= v:
+            legs.append(Leg(drift_steps=int(traj.goal_step[0]), takeoff=None, landing=None, to_goal=False))
+            return legs
+        if not math.isfinite(v):
+            return None
+        if v > promised + lattice.opts.spacing_m and legs:
+            return finish_direct(lattice, legs, samples, steps)
+        promised = v
+        landing = lattice.landings[j]
+        is_goal = j == lattice.n_free
+        takeoff = samples[s].copy()
+        legs.append(Leg(drift_steps=int(steps[s]), takeoff=takeoff, landing=landing, to_goal=is_goal))
+        if is_goal:
+            return legs
+        t += int(steps[s]) * dt + float(np.linalg.norm(landing - takeoff)) / speed
+        pos = np.asarray(landing, dtype=float)
+    if samples is None or steps is None:
+        return None
+    traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
+    return finish_direct(lattice, legs, traj.samples[:, 0], traj.steps[:, 0])
 
 
 def finish_direct(
