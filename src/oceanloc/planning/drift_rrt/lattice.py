@@ -44,6 +44,7 @@ import numpy as np
 from oceanloc._typing import FloatArray
 from oceanloc.models.currents import is_steady
 from oceanloc.models.paths import DriftPath
+from oceanloc.planning.drift_rrt.direct import prefer_direct
 from oceanloc.planning.drift_rrt.lattice_refine import refine_plan
 from oceanloc.planning.drift_rrt.lattice_values import (
     EnvelopeKind,
@@ -134,7 +135,7 @@ def plan_lattice(
     else:
         legs = extract_in_time(lattice, opts.max_flights)
     if legs is None:
-        return DriftPlanResult(
+        failed = DriftPlanResult(
             status=PlanStatus.FAILED,
             path=None,
             flight_energy_wh=math.inf,
@@ -142,6 +143,7 @@ def plan_lattice(
             compute_s=time.perf_counter() - tic,
             message="no drift/flight sequence reaches the goal from the start",
         )
+        return prefer_direct(problem, failed, objective)
     start_traj = SampledDrift(
         points=points[start:],
         samples=traj.samples[:, start:],
@@ -168,7 +170,7 @@ def plan_lattice(
         best_path = resimulate_plan(problem, best_path).path
     ok = _reaches(problem, best_path)
     energy = float(problem.energy.flight_energy_wh(best_path.flight_distance_m))
-    return DriftPlanResult(
+    result = DriftPlanResult(
         status=PlanStatus.EXACT if ok else PlanStatus.APPROXIMATE,
         path=best_path,
         flight_energy_wh=energy,
@@ -181,6 +183,8 @@ def plan_lattice(
         f"{best_path.hops_m().shape[0]} flight(s), "
         f"lattice value {problem.energy.flight_energy_wh(lattice.values[-1]):.2f} Wh",
     )
+    # Flying straight is always a candidate: never return a plan that costs more.
+    return prefer_direct(problem, result, objective)
 
 
 def objective(problem: DriftProblem, path: DriftPath) -> float:

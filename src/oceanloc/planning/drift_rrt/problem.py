@@ -171,6 +171,9 @@ class DriftPlanResult:
     tree : SearchTree or None
         The search tree, for figures.
     message : str
+    direct_chosen : bool
+        The planner's own plan cost more than flying straight (or reached no goal), so the direct flight
+        was returned instead (:func:`oceanloc.planning.drift_rrt.direct.prefer_direct`).
     """
 
     status: PlanStatus
@@ -183,6 +186,7 @@ class DriftPlanResult:
     cost: float = float("nan")
     tree: SearchTree | None = None
     message: str = ""
+    direct_chosen: bool = False
 
     @property
     def success(self) -> bool:
@@ -208,6 +212,7 @@ class DriftPlanResult:
             "iterations": self.iterations,
             "solutions": self.solutions,
             "cost": self.cost,
+            "direct_chosen": self.direct_chosen,
             "tree_nodes": None if self.tree is None else int(self.tree.parent.size),
             "path": None if self.path is None else self.path.to_record(),
         }

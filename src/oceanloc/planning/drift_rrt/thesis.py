@@ -41,6 +41,7 @@ import numpy as np
 from oceanloc.errors import ConfigError
 from oceanloc.models.currents import is_steady
 from oceanloc.models.paths import DriftPath
+from oceanloc.planning.drift_rrt.direct import prefer_direct
 from oceanloc.planning.drift_rrt.nearest import GrowingNearest
 from oceanloc.planning.drift_rrt.objective import ThesisCost
 from oceanloc.planning.drift_rrt.problem import (
@@ -82,6 +83,10 @@ class ThesisOptions:
         Skip rewires that would create a loop.
     keep_tree : bool
         Return the search tree (for figures).
+    compare_direct : bool
+        Return the direct flight instead of a solution that costs more flight energy than flying straight
+        (where the straight flight is feasible), saying so in the message; ``False`` returns DR-RRT*'s own
+        solution whatever it costs.
     """
 
     mode: ThesisMode = "single"
@@ -94,6 +99,7 @@ class ThesisOptions:
     cost: ThesisCost = field(default_factory=ThesisCost)
     prevent_cycles: bool = True
     keep_tree: bool = False
+    compare_direct: bool = True
 
     def __post_init__(self) -> None:
         if self.mode not in THESIS_MODES:
@@ -152,7 +158,10 @@ def plan_thesis(
             compute_s=0.0,
             message=invalid,
         )
-    return _DrRrtStar(problem, rng, budget, opts, tic).run()
+    result = _DrRrtStar(problem, rng, budget, opts, tic).run()
+    if not opts.compare_direct:
+        return result
+    return prefer_direct(problem, result, replace_unsolved=False)
 
 
 class _DrRrtStar:
