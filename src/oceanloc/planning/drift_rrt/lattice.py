@@ -42,6 +42,7 @@ import time
 import numpy as np
 
 from oceanloc._typing import FloatArray
+from oceanloc.errors import ConfigError
 from oceanloc.models.currents import is_steady
 from oceanloc.models.paths import DriftPath
 from oceanloc.planning.drift_rrt.direct import prefer_direct
@@ -57,10 +58,62 @@ from oceanloc.planning.drift_rrt.lattice_values import (
     legs_objective,
     sample_drift,
 )
-from oceanloc.planning.drift_rrt.problem import DriftPlanResult, DriftProblem, PlanBudget, PlanStatus
+from oceanloc.planning.drift_rrt.problem import (
+    DriftPlanResult,
+    DriftProblem,
+    PlanBudget,
+    PlanStatus,
+    arrived_result,
+)
 from oceanloc.planning.drift_rrt.resimulate import resimulate_plan
 
-__all__ = ["EnvelopeKind", "LatticeOptions", "objective", "plan_lattice"]
+__all__ = [
+    "EnvelopeKind",
+    "LatticeOptions",
+    "check_lattice_memory",
+    "lattice_memory_bytes",
+    "objective",
+    "plan_lattice",
+]
+
+GIB = 2.0**30
+BYTES_PER_SAMPLE = 88
+"""Working bytes per drift sample and particle: positions in the rollout and in the sampled drift (2 x 16),
+step counts, time and goal prices, snapped node index, snap distance and flight cost (6 x 8)."""
+BYTES_PER_DENSE_PAIR = 16
+"""Working bytes per (node, landing) pair of the dense flight envelope (float32 distances and two
+temporaries, and the validity mask)."""
+
+
+def lattice_memory_bytes(problem: DriftProblem, options: LatticeOptions) -> tuple[float, float, float]:
+    """Estimated working memory of the lattice search, bytes, and its two drivers.
+
+    Returns ``(bytes, nodes, samples)``: lattice nodes over the map (its extent divided by the spacing) and
+    drift samples per node (horizon steps divided by the stride). Computed in floating point, so a map of
+    1e300 m gives ``inf`` rather than an overflow.
+    """
+    x0, x1, y0, y1 = (float(v) for v in problem.space.bounds_m)
+    h = options.spacing_m
+    nodes = (math.floor((x1 - x0) / h) + 1.0) * (math.floor((y1 - y0) / h) + 1.0)
+    samples = problem.horizon_s / problem.propagator.dt_s / options.stride + 2.0
+    total = BYTES_PER_SAMPLE * samples * (nodes + 1.0)
+    if options.envelope == "dense":
+        total += BYTES_PER_DENSE_PAIR * nodes * (nodes + 1.0)
+    return total, nodes, samples
+
+
+def check_lattice_memory(problem: DriftProblem, options: LatticeOptions) -> None:
+    """Raise a ConfigError, before allocating, when the search would need more than
+    ``options.max_memory_gib``; the message names the map, step and horizon to change."""
+    total, nodes, samples = lattice_memory_bytes(problem, options)
+    if total <= options.max_memory_gib * GIB:
+        return
+    raise ConfigError(
+        f"the lattice planner would need about {total / GIB:.3g} GiB (at most {options.max_memory_gib:g}): "
+        f"{nodes:.3g} lattice nodes {options.spacing_m:g} m apart over the map, {samples:.3g} drift samples "
+        f"each (horizon {problem.horizon_s / 3600:g} h, step {problem.propagator.dt_s:g} s); shrink [map] "
+        "bounds_m, raise [drift] dt_s or shorten [drift] horizon_h"
+    )
 
 
 def _build_path(problem: DriftProblem, legs: list[Leg]) -> DriftPath:
@@ -111,6 +164,7 @@ def plan_lattice(
     DriftPlanResult
     """
     opts = options or LatticeOptions()
+    check_lattice_memory(problem, opts)
     tic = time.perf_counter()
     direct = problem.direct_flight_wh
     invalid = problem.validate_endpoints()
@@ -123,6 +177,8 @@ def plan_lattice(
             compute_s=0.0,
             message=invalid,
         )
+    if problem.starts_in_goal:
+        return arrived_result(problem)
     offset = rng.uniform(0.0, opts.spacing_m, 2) if opts.random_offset else np.zeros(2)
     lattice = ValueLattice(problem, opts, offset)
     points = np.concatenate([lattice.nodes[lattice.free_idx], problem.start_m[None]], axis=0)

@@ -45,6 +45,9 @@ class LatticeOptions:
         Shift the lattice by a random fraction of ``h`` drawn from the planner's generator.
     max_flights : int
         Safety cap on the number of flights in a plan.
+    max_memory_gib : float
+        Largest estimated working memory of a search (GiB); a larger problem is a ConfigError saying what
+        to change, raised before anything is allocated.
     """
 
     spacing_m: float = 300.0
@@ -56,12 +59,15 @@ class LatticeOptions:
     cloud_half_width: int = 4
     random_offset: bool = True
     max_flights: int = 64
+    max_memory_gib: float = 4.0
 
     def __post_init__(self) -> None:
         if not self.spacing_m > 0:
             raise ConfigError(f"lattice spacing must be positive, got {self.spacing_m}")
         if self.stride < 1 or self.max_value_iterations < 1 or self.max_flights < 1:
             raise ConfigError("stride, max_value_iterations and max_flights must be at least 1")
+        if not self.max_memory_gib > 0:
+            raise ConfigError(f"max_memory_gib must be positive, got {self.max_memory_gib}")
         if self.envelope not in ("dense", "stencil"):
             raise ConfigError(f"envelope must be 'dense' or 'stencil', got '{self.envelope}'")
         if self.refine_rounds < 0 or self.cloud_half_width < 1 or self.stencil_radius < 1:

@@ -101,6 +101,11 @@ class DriftProblem:
         """Baseline energy: fly straight from start to goal (the thesis' red line, 49.5 Wh)."""
         return float(self.energy.flight_energy_wh(self.direct_flight_m))
 
+    @property
+    def starts_in_goal(self) -> bool:
+        """The start already lies inside the goal disk (nothing to plan)."""
+        return self.direct_flight_m < self.goal_tolerance_m
+
     def validate_endpoints(self) -> str | None:
         """A message if the start or the goal is not a valid state, else ``None``."""
         for name, point in (("start", self.start_m), ("goal", self.goal_m)):
@@ -195,7 +200,7 @@ class DriftPlanResult:
     @property
     def saving(self) -> float:
         """Fraction of the direct-flight energy saved (negative if the plan flies more)."""
-        if not self.success:
+        if not self.success or not self.direct_flight_wh > 0:
             return float("nan")
         return 1.0 - self.flight_energy_wh / self.direct_flight_wh
 
@@ -207,7 +212,7 @@ class DriftPlanResult:
             "message": self.message,
             "flight_energy_wh": self.flight_energy_wh if self.path is not None else None,
             "direct_flight_wh": self.direct_flight_wh,
-            "saving": self.saving if self.success else None,
+            "saving": self.saving if self.success and self.direct_flight_wh > 0 else None,
             "compute_s": self.compute_s,
             "iterations": self.iterations,
             "solutions": self.solutions,
@@ -216,3 +221,21 @@ class DriftPlanResult:
             "tree_nodes": None if self.tree is None else int(self.tree.parent.size),
             "path": None if self.path is None else self.path.to_record(),
         }
+
+
+def arrived_result(problem: DriftProblem) -> DriftPlanResult:
+    """The plan of a problem whose start lies inside the goal disk: stay (a one-point path, 0 Wh)."""
+    path = DriftPath(
+        points_m=problem.start_m[None], times_s=np.array([problem.t0_s]), flight=np.zeros(0, bool)
+    )
+    return DriftPlanResult(
+        status=PlanStatus.EXACT,
+        path=path,
+        flight_energy_wh=0.0,
+        direct_flight_wh=problem.direct_flight_wh,
+        compute_s=0.0,
+        solutions=1,
+        cost=0.0,
+        message=f"the start is {problem.direct_flight_m:g} m from the goal, inside its "
+        f"{problem.goal_tolerance_m:g} m disk: nothing to plan",
+    )

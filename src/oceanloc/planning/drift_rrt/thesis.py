@@ -50,6 +50,7 @@ from oceanloc.planning.drift_rrt.problem import (
     PlanBudget,
     PlanStatus,
     SearchTree,
+    arrived_result,
 )
 from oceanloc.planning.drift_rrt.resimulate import resimulate_plan
 
@@ -158,6 +159,8 @@ def plan_thesis(
             compute_s=0.0,
             message=invalid,
         )
+    if problem.starts_in_goal:
+        return arrived_result(problem)
     result = _DrRrtStar(problem, rng, budget, opts, tic).run()
     if not opts.compare_direct:
         return result
