@@ -231,3 +231,68 @@ def test_drift_plan_command_exits_2_with_one_line(tmp_path, changes, reason):
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert len(lines) == 1, proc.stderr
     assert reason in lines[0]
+
+
+FUZZ_FIELDS = [
+    ("currents", "velocity_mps = [{v}, 0.0]"),
+    ("drift", "dt_s = {v}"),
+    ("drift", "horizon_h = {v}"),
+    ("map", "bounds_m = [0.0, {v}, 0.0, 3000.0]"),
+    ("map", "inflation_m = {v}"),
+    ("route", "start_m = [{v}, 500.0]"),
+    ("route", "goal_m = [3500.0, {v}]"),
+    ("route", "goal_tolerance_m = {v}"),
+    ("route", "start_time_s = {v}"),
+    ("vehicle", "flight_power_w = {v}"),
+    ("vehicle", "flight_speed_kn = {v}"),
+    ("vehicle", "max_flight_time_s = {v}"),
+    ("vehicle", "nautical_mile_m = {v}"),
+    ("vehicle", "solar_wh_per_day = {v}"),
+    ("hdop", "target_m = [{v}, 2600.0]"),
+    ("planner", "time_weight_wh_per_h = {v}"),
+    ("following", "watch_circle_m = {v}"),
+    ("following", "current_scale = {v}"),
+    ("following", "stray_m = {v}"),
+]
+FUZZ_VALUES = [
+    "0.0",
+    "-1.0",
+    "1e-300",
+    "5e-324",
+    "1e300",
+    "-1e300",
+    "nan",
+    "inf",
+    "-inf",
+    "3.0",
+    "2500.0",
+    "1e6",
+]
+
+
+def test_fuzzed_field_values_are_errors_or_finite_plans(tmp_path):
+    """48 of the 228 (field, value) pairs, drawn with a fixed seed: each either is a ConfigError naming the
+    file and a field, or loads and plans with a finite energy (never NaN, inf or a traceback)."""
+    rng = np.random.default_rng(11)
+    pairs = [(t, f, v) for t, f in FUZZ_FIELDS for v in FUZZ_VALUES]
+    picks = rng.choice(len(pairs), size=48, replace=False)
+    accepted = 0
+    for i in picks:
+        table, template, value = pairs[int(i)]
+        path = tmp_path / f"fuzz{i}.toml"
+        path.write_text(scenario_text(**{table: template.format(v=value)}))
+        try:
+            scenario = load_drift_scenario(path)
+        except ConfigError as exc:
+            # The field itself, or the one it conflicts with (a start outside shrunken bounds).
+            message = str(exc)
+            assert message.startswith(str(path)) and " field '" in message and "\n" not in message, message
+            continue
+        accepted += 1
+        result = make_planner("oceanloc")(problem_from_scenario(scenario), np.random.default_rng(0))
+        assert result.status is PlanStatus.EXACT, (template, value, result.message)
+        assert (
+            np.isfinite(result.flight_energy_wh) and result.flight_energy_wh <= result.direct_flight_wh + 1e-9
+        )
+        assert np.all(np.isfinite(result.path.points_m)) and np.all(np.isfinite(result.path.times_s))
+    assert 0 < accepted < 48

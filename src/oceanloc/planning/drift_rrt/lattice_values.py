@@ -405,7 +405,10 @@ def extract_in_time(lattice: ValueLattice, max_flights: int) -> list[Leg] | None
 
     The lattice values (computed from the start time) only rank the landing points; the drift from each
     landing is integrated afresh from the time the vehicle lands there (start time plus the drift and
-    flight time so far), so the take-off points are those of the flown path.
+    flight time so far), so the take-off points are those of the flown path. Because the values are only
+    an estimate in a time-varying field, every step also keeps the exact plan "what is flown so far, then
+    drift into the goal or fly straight to it", and the cheapest of these (by :func:`legs_objective`) is
+    returned if it beats the greedy plan.
     """
     problem = lattice.problem
     dt, speed = problem.propagator.dt_s, problem.energy.flight_speed_mps
@@ -413,34 +416,48 @@ def extract_in_time(lattice: ValueLattice, max_flights: int) -> list[Leg] | None
     t = problem.t0_s
     legs: list[Leg] = []
     promised = math.inf
-    samples = steps = None
+    best: list[Leg] | None = None
+    best_cost = math.inf
+
+    def consider(plan: list[Leg] | None) -> None:
+        nonlocal best, best_cost
+        if plan is None:
+            return
+        cost = legs_objective(problem, plan)
+        if cost < best_cost - 1e-9:
+            best, best_cost = plan, cost
+
     for _ in range(max_flights):
         traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
         samples = traj.samples[:, 0].copy()
         steps = traj.steps[:, 0]
+        into_goal = Leg(drift_steps=int(traj.goal_step[0]), takeoff=None, landing=None, to_goal=False)
+        if bool(traj.reaches[0]):
+            consider([*legs, into_goal])
+        consider(finish_direct(lattice, list(legs), samples, steps))
         if legs and not math.isfinite(lattice.leg):
             samples[0] = np.nan
         v, s, j = lattice.best_takeoff(samples, traj.time_cost[:, 0], traj.goal_cost[:, 0])
-        if float(traj.finish[0]) <= v:
-            legs.append(Leg(drift_steps=int(traj.goal_step[0]), takeoff=None, landing=None, to_goal=False))
-            return legs
-        if not math.isfinite(v):
-            return None
+        if float(traj.finish[0]) <= v or not math.isfinite(v):
+            break
         if v > promised + lattice.opts.spacing_m and legs:
-            return finish_direct(lattice, legs, samples, steps)
+            break
         promised = v
         landing = lattice.landings[j]
         is_goal = j == lattice.n_free
         takeoff = samples[s].copy()
         legs.append(Leg(drift_steps=int(steps[s]), takeoff=takeoff, landing=landing, to_goal=is_goal))
         if is_goal:
-            return legs
+            consider(list(legs))
+            break
+        if legs_objective(problem, legs) >= best_cost:
+            break  # what is flown already costs more than a complete plan found before
         t += int(steps[s]) * dt + float(np.linalg.norm(landing - takeoff)) / speed
         pos = np.asarray(landing, dtype=float)
-    if samples is None or steps is None:
-        return None
-    traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
-    return finish_direct(lattice, legs, traj.samples[:, 0], traj.steps[:, 0])
+    else:
+        traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
+        consider(finish_direct(lattice, list(legs), traj.samples[:, 0], traj.steps[:, 0]))
+    return best
 
 
 def finish_direct(
