@@ -249,3 +249,10 @@ def test_periodic_scenario_start_time_errors(tmp_path, start, reason):
     with pytest.raises(ConfigError, match=None) as err:
         load_drift_scenario(path)
     assert reason in str(err.value)
+
+
+def test_a_problem_needs_a_finite_start_time():
+    from oceanloc.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="start time t0_s must be finite"):
+        gyre_problem(float("nan"))

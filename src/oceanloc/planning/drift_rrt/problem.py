@@ -7,6 +7,7 @@ optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -73,6 +74,8 @@ class DriftProblem:
             raise ConfigError("start and goal must be finite (x, y) positions in metres")
         if not self.goal_tolerance_m > 0:
             raise ConfigError(f"goal tolerance must be positive, got {self.goal_tolerance_m}")
+        if not math.isfinite(self.t0_s):
+            raise ConfigError(f"start time t0_s must be finite, got {self.t0_s}")
         if not self.horizon_s > 0:
             raise ConfigError(f"planning horizon must be positive, got {self.horizon_s}")
         if not self.time_weight_wh_per_h >= 0:
