@@ -34,6 +34,9 @@ and the path-following trial::
     start_m = [-4000.0, 4000.0]
     goal_m = [3000.0, -3000.0]
     goal_tolerance_m = 100.0
+    start_time_s = 0.0             # start time in the field's clock (s; a double gyre's phase, or
+                                   # seconds after a netcdf product's first slice); netcdf may give
+    # start_time = "2024-01-01T06:00:00" instead (ISO 8601, within the product's time axis)
 
     [vehicle]                      # Table 1 and (IV.14)
     flight_power_w = 200.0
@@ -74,6 +77,7 @@ import numpy as np
 
 from oceanloc.config.builtin import builtin_folder, builtin_names, resolve_scenario
 from oceanloc.config.toml_fields import Table
+from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
 from oceanloc.models.currents import (
     CurrentField,
@@ -81,12 +85,15 @@ from oceanloc.models.currents import (
     UniformCurrent,
     VortexCurrent,
     thesis_vortex_grid,
+    time_span_s,
 )
 from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
 from oceanloc.models.obstacles import ObstacleMap, OccupancyGrid
+from oceanloc.planning.drift_rrt.lattice import check_lattice_memory
 from oceanloc.planning.drift_rrt.objective import HdopTerm
+from oceanloc.planning.drift_rrt.oceanloc_planner import DEFAULT_OPTIONS
 from oceanloc.planning.drift_rrt.planner import DriftPlannerName, parse_planner_name
 from oceanloc.planning.drift_rrt.problem import DriftProblem
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
@@ -94,6 +101,21 @@ from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.units import DEG
 
 CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
+
+# Physical ranges of the scenario fields (every value outside is a one-line error naming the field).
+MAX_CURRENT_MPS = 10.0
+"""Fastest current accepted, m/s (the strongest tidal races run at about 5 m/s)."""
+MAX_COORD_M = 1e7
+"""Largest coordinate of a local frame, metres (a quarter of the Earth's circumference)."""
+MAX_LENGTH_M = 1e6
+"""Largest length scale of an analytic field, metres."""
+MIN_DT_S, MAX_DT_S = 1.0, 3600.0
+"""Drift step range, seconds."""
+MAX_HORIZON_H = 24.0 * 30
+"""Longest drift horizon, hours (a month)."""
+MAX_HORIZON_STEPS = 200_000
+"""Most drift steps in one horizon (horizon / step)."""
+MAX_SEED = 2**63 - 1
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -153,6 +175,8 @@ class DriftScenario:
     flights_avoid_obstacles : bool
     start_m, goal_m : (2,) float
     goal_tolerance_m : float
+    start_time_s : float
+        Start time in the current's clock, seconds (every drift leg is integrated from its own start time).
     energy : EnergyBudget
     max_leg_m : float or None
         Longest flight leg (one hop) or ``None`` for flights of any length.
@@ -186,6 +210,7 @@ class DriftScenario:
     start_m: np.ndarray
     goal_m: np.ndarray
     goal_tolerance_m: float = 100.0
+    start_time_s: float = 0.0
     energy: EnergyBudget = field(default_factory=EnergyBudget)
     max_leg_m: float | None = None
     hdop_others_m: np.ndarray | None = None
@@ -210,13 +235,31 @@ def load_drift_scenario(name_or_path: str | Path) -> DriftScenario:
 
     The scenario keeps its TOML text (:attr:`DriftScenario.toml_text`) so results can carry its hash.
     """
-    root, folder = resolve_scenario(name_or_path, "drift")
+    try:
+        root, folder = resolve_scenario(name_or_path, "drift")
+    except RecursionError:
+        raise ConfigError(
+            f"{name_or_path}: TOML nested too deeply to read (a scenario needs two levels of tables)"
+        ) from None
     if folder is None:
         text = builtin_folder("drift").joinpath(f"{name_or_path}.toml").read_text(encoding="utf-8")
     else:
         text = Path(name_or_path).read_text(encoding="utf-8")
     scenario = drift_scenario_from_table(root, base_dir=folder or Path(str(builtin_folder("drift"))))
     return dataclasses.replace(scenario, toml_text=text)
+
+
+def check_planning_memory(scenario: DriftScenario, source: str) -> None:
+    """Raise a ConfigError naming ``source`` if the lattice planner would need more memory than allowed.
+
+    The estimate (:func:`oceanloc.planning.drift_rrt.lattice.lattice_memory_bytes`) counts the lattice
+    nodes over ``[map] bounds_m`` and the drift samples over ``[drift] horizon_h / dt_s``; the message says
+    which of them to change.
+    """
+    try:
+        check_lattice_memory(problem_from_scenario(scenario), DEFAULT_OPTIONS)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -228,32 +271,33 @@ class CurrentSettings:
     description: str
     land: OccupancyGrid | None = None
     data_files: tuple[str, ...] = ()
+    time_origin: str | None = None
 
 
 def _currents(t: Table, base_dir: Path) -> CurrentSettings:
     kind = t.str("kind", "thesis-vortex", choices=CURRENT_KINDS)
     if kind == "thesis-vortex":
         interp = t.str("interpolation", "cell", choices=("cell", "linear"))
-        scale = t.float("scale_m", 10_000.0, lo=1.0, lo_open=False)
+        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
         f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
         how = "piecewise constant per cell" if interp == "cell" else "bilinear"
         return CurrentSettings(
             field=f, projection=None, description=f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
         )
     if kind == "vortex":
-        scale = t.float("scale_m", 10_000.0, lo=1.0)
-        half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True)
+        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
+        half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
         return CurrentSettings(
             field=VortexCurrent(scale_m=scale, half_width_m=half),
             projection=None,
             description=f"analytic thesis vortex (scale {scale:g} m)",
         )
     if kind == "double-gyre":
-        length = t.float("length_m", 5000.0, lo=0.0, lo_open=True)
-        amp = t.float("amplitude_mps", 0.5, lo=0.0)
+        length = t.float("length_m", 5000.0, lo=1.0, hi=MAX_LENGTH_M)
+        amp = t.float("amplitude_mps", 0.5, lo=0.0, hi=MAX_CURRENT_MPS)
         eps = t.float("epsilon", 0.0, lo=0.0, hi=1.0)
-        period_h = t.float("period_h", 24.0, lo=0.0, lo_open=True)
-        origin = t.vector("origin_m", 2, [0.0, 0.0])
+        period_h = t.float("period_h", 24.0, lo=0.01, hi=24.0 * 365)
+        origin = _coords(t, "origin_m", 2, [0.0, 0.0])
         f = DoubleGyreCurrent(
             length_m=length,
             amplitude_mps=amp,
@@ -265,6 +309,12 @@ def _currents(t: Table, base_dir: Path) -> CurrentSettings:
         return CurrentSettings(field=f, projection=None, description=desc)
     if kind == "uniform":
         vel = t.vector("velocity_mps", 2)
+        if not np.all(np.abs(vel) <= MAX_CURRENT_MPS):
+            raise t.error(
+                "velocity_mps",
+                f"components must lie within [-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}] m/s, "
+                f"got {vel.tolist()}",
+            )
         return CurrentSettings(
             field=UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
             projection=None,
@@ -280,6 +330,11 @@ def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
     v = t.str("v", "") or None
     depth = t.int("depth_index", -1, lo=-1)
     origin = t.vector("origin_lonlat_deg", 2, []) if t.has("origin_lonlat_deg") else None
+    if origin is not None and not (-180.0 <= origin[0] <= 360.0 and -90.0 <= origin[1] <= 90.0):
+        raise t.error(
+            "origin_lonlat_deg",
+            f"must be [lon, lat] within [-180, 360] and [-90, 90] degrees, got {origin.tolist()}",
+        )
     interp = t.str("interpolation", "linear", choices=("cell", "linear"))
     product = open_current_netcdf(
         path,
@@ -289,12 +344,23 @@ def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
         origin_lonlat_deg=None if origin is None else (float(origin[0]), float(origin[1])),
         interpolation=interp,  # type: ignore[arg-type]
     )
+    f = product.field
+    with np.errstate(invalid="ignore"):
+        peak = float(np.nanmax(np.hypot(f.u_mps, f.v_mps))) if np.isfinite(f.u_mps).any() else 0.0
+    if not peak <= MAX_CURRENT_MPS:
+        raise t.error(
+            "path",
+            f"{path.name} holds currents up to {peak:.3g} m/s; speeds must lie within "
+            f"[0, {MAX_CURRENT_MPS:g}] m/s "
+            "(check the variables' units and fill values)",
+        )
     return CurrentSettings(
         field=product.field,
         projection=product.projection,
         description=product.description,
         land=land_obstacles(product.field),
         data_files=(str(path),),
+        time_origin=product.time_origin,
     )
 
 
@@ -309,8 +375,16 @@ class DriftSettings:
 
 def _drift_settings(t: Table) -> DriftSettings:
     method = t.str("integrator", "rk4", choices=METHODS)
-    dt = t.float("dt_s", 60.0, lo=0.0, lo_open=True, hi=86_400.0)
-    horizon_h = t.float("horizon_h", 24.0, lo=0.0, lo_open=True, hi=24.0 * 365)
+    dt = t.float("dt_s", 60.0, lo=MIN_DT_S, hi=MAX_DT_S)
+    horizon_h = t.float("horizon_h", 24.0, lo=0.0, lo_open=True, hi=MAX_HORIZON_H)
+    steps = horizon_h * 3600.0 / dt
+    if steps > MAX_HORIZON_STEPS:
+        raise t.error(
+            "horizon_h",
+            f"{horizon_h:g} h at dt_s = {dt:g} s is {steps:.3g} drift steps; at most {MAX_HORIZON_STEPS} "
+            f"(raise dt_s to at least {horizon_h * 3600.0 / MAX_HORIZON_STEPS:.3g} s or shorten horizon_h to "
+            f"at most {MAX_HORIZON_STEPS * dt / 3600.0:.3g} h)",
+        )
     t.check_unknown()
     return DriftSettings(integrator=method, dt_s=dt, horizon_s=horizon_h * 3600.0)  # type: ignore[arg-type]
 
@@ -323,9 +397,19 @@ class MapSettings:
     flights_avoid_obstacles: bool
 
 
+def _coords(t: Table, key: str, length: int, default: object = None) -> np.ndarray:
+    """A vector of ``length`` finite coordinates (m) within plus or minus :data:`MAX_COORD_M`."""
+    value = t.vector(key, length) if default is None else t.vector(key, length, default)
+    if not np.all(np.abs(value) <= MAX_COORD_M):
+        raise t.error(
+            key, f"coordinates must lie within [-{MAX_COORD_M:g}, {MAX_COORD_M:g}] m, got {value.tolist()}"
+        )
+    return value
+
+
 def _map_bounds(t: Table, default_bounds: tuple[float, float, float, float] | None) -> np.ndarray:
     if t.has("bounds_m") or default_bounds is None:
-        bounds = t.vector("bounds_m", 4)
+        bounds = _coords(t, "bounds_m", 4)
     else:
         bounds = np.asarray(default_bounds, dtype=float)
     if not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):
@@ -338,8 +422,8 @@ def _map_bounds(t: Table, default_bounds: tuple[float, float, float, float] | No
 def _rectangles(t: Table) -> np.ndarray:
     rects = []
     for rt in t.tables("rectangles"):
-        xr = rt.vector("x_m", 2)
-        yr = rt.vector("y_m", 2)
+        xr = _coords(rt, "x_m", 2)
+        yr = _coords(rt, "y_m", 2)
         if not (xr[0] < xr[1] and yr[0] < yr[1]):
             raise rt.error(
                 "x_m",
@@ -360,6 +444,8 @@ def _polygons(t: Table) -> tuple[np.ndarray, ...]:
             raise pt.error("vertices_m", "must be a list of [x, y] pairs") from None
         if verts.ndim != 2 or verts.shape[1] != 2 or verts.shape[0] < 3 or not np.all(np.isfinite(verts)):
             raise pt.error("vertices_m", f"needs at least three finite [x, y] vertices, got {raw!r}")
+        if not np.all(np.abs(verts) <= MAX_COORD_M):
+            raise pt.error("vertices_m", f"coordinates must lie within [-{MAX_COORD_M:g}, {MAX_COORD_M:g}] m")
         polys.append(verts)
         pt.check_unknown()
     return tuple(polys)
@@ -367,7 +453,7 @@ def _polygons(t: Table) -> tuple[np.ndarray, ...]:
 
 def _map_settings(t: Table, currents: CurrentSettings) -> MapSettings:
     bounds = _map_bounds(t, currents.field.bounds_m)
-    inflation = t.float("inflation_m", 0.0, lo=0.0)
+    inflation = t.float("inflation_m", 0.0, lo=0.0, hi=MAX_LENGTH_M)
     no_fly = t.bool("flights_avoid_obstacles", False)
     rects = _rectangles(t)
     polys = _polygons(t)
@@ -389,14 +475,69 @@ class RouteSettings:
     start_m: np.ndarray
     goal_m: np.ndarray
     goal_tolerance_m: float
+    start_time_s: float = 0.0
 
 
-def _route(t: Table) -> RouteSettings:
-    start = t.vector("start_m", 2)
-    goal = t.vector("goal_m", 2)
-    tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True)
+MAX_START_TIME_S = 1e10
+"""Largest start time accepted, seconds (about 300 years: any clock of a field)."""
+
+
+def _start_time(t: Table, currents: CurrentSettings, horizon_s: float) -> float:
+    """``start_time_s`` (seconds in the field's clock) or ``start_time`` (ISO 8601, gridded products).
+
+    For a field with a time axis the start must lie within it and the horizon must end by its last slice
+    (beyond it the current is unknown); the error gives the allowed range.
+    """
+    if t.has("start_time") and t.has("start_time_s"):
+        raise t.error("start_time", "give start_time or start_time_s, not both")
+    if t.has("start_time"):
+        text = t.str("start_time")
+        if currents.time_origin is None:
+            raise t.error("start_time", "needs a current product with a time axis; use start_time_s")
+        try:
+            when = np.datetime64(text.strip().rstrip("Z"), "s")
+        except ValueError:
+            raise t.error(
+                "start_time", f"must be an ISO 8601 time such as 2024-01-01T06:00:00, got {text!r}"
+            ) from None
+        t0 = float((when - np.datetime64(currents.time_origin, "s")) / np.timedelta64(1, "s"))
+        key = "start_time"
+    else:
+        t0 = t.float("start_time_s", 0.0, lo=-MAX_START_TIME_S, hi=MAX_START_TIME_S)
+        key = "start_time_s"
+    span = time_span_s(currents.field)
+    if span is not None:
+        first, last = span
+        if not first <= t0 < last:
+            origin = f" after {currents.time_origin}" if currents.time_origin else ""
+            raise t.error(
+                key, f"must lie within the current's time axis, [{first:g}, {last:g}) s{origin}; got {t0:g} s"
+            )
+        if t0 + horizon_s > last:
+            raise t.error(
+                key,
+                f"the drift horizon ({horizon_s / 3600:g} h) would run past the current's last time slice "
+                f"({last:g} s); start by {last - horizon_s:g} s or shorten [drift] horizon_h to at most "
+                f"{(last - t0) / 3600:g} h",
+            )
+    return t0
+
+
+def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettings:
+    start = _coords(t, "start_m", 2)
+    goal = _coords(t, "goal_m", 2)
+    tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
+    gap = float(np.linalg.norm(goal - start))
+    if gap < tol:
+        raise t.error(
+            "goal_m",
+            f"{goal.tolist()} is {gap:g} m from start_m, inside the goal disk "
+            f"(goal_tolerance_m = {tol:g} m): "
+            "nothing to plan; move the goal or reduce goal_tolerance_m",
+        )
+    t0 = _start_time(t, currents, horizon_s)
     t.check_unknown()
-    return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol)
+    return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol, start_time_s=t0)
 
 
 def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None:
@@ -416,14 +557,14 @@ class VehicleSettings:
 
 def _vehicle(t: Table) -> VehicleSettings:
     energy = EnergyBudget(
-        base_load_w=t.float("base_load_w", 5.0, lo=0.0),
-        sensing_w=t.float("sensing_w", 10.0, lo=0.0),
+        base_load_w=t.float("base_load_w", 5.0, lo=0.0, hi=1e4),
+        sensing_w=t.float("sensing_w", 10.0, lo=0.0, hi=1e4),
         sensing_hours_per_day=t.float("sensing_hours_per_day", 6.0, lo=0.0, hi=24.0),
-        flight_power_w=t.float("flight_power_w", 200.0, lo=0.0, lo_open=True),
-        flight_speed_kn=t.float("flight_speed_kn", 20.0, lo=0.0, lo_open=True),
-        solar_wh_per_day=t.float("solar_wh_per_day", 400.0, lo=0.0),
-        max_flight_time_s=t.float("max_flight_time_s", 120.0, lo=0.0, lo_open=True),
-        nautical_mile_m=t.float("nautical_mile_m", 1852.0, lo=0.0, lo_open=True),
+        flight_power_w=t.float("flight_power_w", 200.0, lo=1.0, hi=1e5),
+        flight_speed_kn=t.float("flight_speed_kn", 20.0, lo=0.5, hi=200.0),
+        solar_wh_per_day=t.float("solar_wh_per_day", 400.0, lo=0.0, hi=1e5),
+        max_flight_time_s=t.float("max_flight_time_s", 120.0, lo=1.0, hi=86_400.0),
+        nautical_mile_m=t.float("nautical_mile_m", 1852.0, lo=1000.0, hi=3000.0),
     )
     legs = t.str("flight_legs", "hop", choices=("hop", "any"))
     t.check_unknown()
@@ -447,7 +588,11 @@ def _hdop(t: Table) -> HdopSettings:
         others = np.asarray(raw, dtype=float).reshape(-1, 2)
     except (TypeError, ValueError):
         raise t.error("others_m", "must be a list of [x, y] positions") from None
-    target = t.vector("target_m", 2)
+    if others.shape[0] < 1 or not np.all(np.abs(others) <= MAX_COORD_M):
+        raise t.error(
+            "others_m", f"needs at least one [x, y] position within [-{MAX_COORD_M:g}, {MAX_COORD_M:g}] m"
+        )
+    target = _coords(t, "target_m", 2)
     t.check_unknown()
     return HdopSettings(others_m=others, target_m=target)
 
@@ -464,23 +609,23 @@ class PlannerSettings:
 def _planner_settings(t: Table) -> PlannerSettings:
     raw = t.str("kind", "oceanloc")
     planner = parse_planner_name(raw, t.where("kind") + ":")
-    seed = t.int("seed", 1, lo=0)
-    time_weight = t.float("time_weight_wh_per_h", 0.0, lo=0.0)
+    seed = t.int("seed", 1, lo=0, hi=MAX_SEED)
+    time_weight = t.float("time_weight_wh_per_h", 0.0, lo=0.0, hi=1e4)
     t.check_unknown()
     return PlannerSettings(planner=planner, seed=seed, time_weight_wh_per_h=time_weight)
 
 
 def _following(t: Table) -> FollowingSettings:
     following = FollowingSettings(
-        watch_circle_m=t.float("watch_circle_m", 150.0, lo=0.0, lo_open=True),
-        current_scale=t.float("current_scale", 1.1, lo=0.0),
+        watch_circle_m=t.float("watch_circle_m", 150.0, lo=0.0, lo_open=True, hi=MAX_LENGTH_M),
+        current_scale=t.float("current_scale", 1.1, lo=0.0, hi=10.0),
         current_rotation_rad=t.float("current_rotation_deg", 5.0, lo=-180.0, hi=180.0) * DEG,
-        noise_mps=t.float("noise_mps", 0.05, lo=0.0),
-        noise_correlation_s=t.float("noise_correlation_s", 1800.0, lo=0.0, lo_open=True),
-        stray_m=t.float("stray_m", 400.0, lo=0.0, lo_open=True),
-        max_replans=t.int("max_replans", 20, lo=0),
-        runs=t.int("runs", 200, lo=1),
-        seed=t.int("seed", 7, lo=0),
+        noise_mps=t.float("noise_mps", 0.05, lo=0.0, hi=MAX_CURRENT_MPS),
+        noise_correlation_s=t.float("noise_correlation_s", 1800.0, lo=1.0, hi=1e7),
+        stray_m=t.float("stray_m", 400.0, lo=0.0, lo_open=True, hi=MAX_LENGTH_M),
+        max_replans=t.int("max_replans", 20, lo=0, hi=1000),
+        runs=t.int("runs", 200, lo=1, hi=100_000),
+        seed=t.int("seed", 7, lo=0, hi=MAX_SEED),
     )
     t.check_unknown()
     return following
@@ -503,14 +648,14 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     drift = _drift_settings(root.table("drift", required=False))
     map_ = _map_settings(root.table("map", required=False), currents)
     route_t = root.table("route")
-    route = _route(route_t)
+    route = _route(route_t, currents, drift.horizon_s)
     vehicle = _vehicle(root.table("vehicle", required=False))
     hdop = _hdop(root.table("hdop", required=False))
     planner = _planner_settings(root.table("planner", required=False))
     following = _following(root.table("following", required=False))
     root.check_unknown()
     _check_route(route_t, route, map_.obstacles)
-    return DriftScenario(
+    scenario = DriftScenario(
         name=name,
         description=description,
         current=currents.field,
@@ -522,6 +667,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         start_m=route.start_m,
         goal_m=route.goal_m,
         goal_tolerance_m=route.goal_tolerance_m,
+        start_time_s=route.start_time_s,
         energy=vehicle.energy,
         max_leg_m=vehicle.max_leg_m,
         hdop_others_m=hdop.others_m,
@@ -534,6 +680,9 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         currents_description=currents.description,
         data_files=currents.data_files,
     )
+    if scenario.planner == "oceanloc":
+        check_planning_memory(scenario, root.source)
+    return scenario
 
 
 def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
@@ -554,4 +703,5 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
         horizon_s=scenario.horizon_s,
         max_leg_m=scenario.max_leg_m,
         time_weight_wh_per_h=scenario.time_weight_wh_per_h,
+        t0_s=scenario.start_time_s,
     )

@@ -133,6 +133,29 @@ THESIS_VORTEX_SPACING = 0.05
 """Mesh spacing of the thesis vortex in unscaled units (500 m after scaling)."""
 
 
+def is_steady(field: CurrentField) -> bool:
+    """Whether ``field`` is the same at every time (planners may then drift every leg from any time).
+
+    Uniform, linear and vortex fields are steady; a double gyre is steady only with ``epsilon = 0``, a grid
+    only without a time axis (or with a single slice). Any other field is taken as time-varying, which is
+    always safe: planners then integrate every leg from its own start time.
+    """
+    if isinstance(field, UniformCurrent | LinearCurrent | VortexCurrent):
+        return True
+    if isinstance(field, DoubleGyreCurrent):
+        return field.epsilon == 0.0 or field.omega_rad_s == 0.0
+    if isinstance(field, GridCurrent):
+        return field.time_s is None or field.time_s.size < 2
+    return False
+
+
+def time_span_s(field: CurrentField) -> tuple[float, float] | None:
+    """``(first, last)`` time the field is defined at, seconds, or ``None`` if defined at every time."""
+    if isinstance(field, GridCurrent) and field.time_s is not None and field.time_s.size >= 2:
+        return float(field.time_s[0]), float(field.time_s[-1])
+    return None
+
+
 def vortex_velocity_xy(
     x_m: Scalar, y_m: Scalar, scale_m: float = THESIS_VORTEX_SCALE_M
 ) -> tuple[Scalar, Scalar]:

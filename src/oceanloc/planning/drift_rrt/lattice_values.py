@@ -45,6 +45,9 @@ class LatticeOptions:
         Shift the lattice by a random fraction of ``h`` drawn from the planner's generator.
     max_flights : int
         Safety cap on the number of flights in a plan.
+    max_memory_gib : float
+        Largest estimated working memory of a search (GiB); a larger problem is a ConfigError saying what
+        to change, raised before anything is allocated.
     """
 
     spacing_m: float = 300.0
@@ -56,12 +59,15 @@ class LatticeOptions:
     cloud_half_width: int = 4
     random_offset: bool = True
     max_flights: int = 64
+    max_memory_gib: float = 4.0
 
     def __post_init__(self) -> None:
         if not self.spacing_m > 0:
             raise ConfigError(f"lattice spacing must be positive, got {self.spacing_m}")
         if self.stride < 1 or self.max_value_iterations < 1 or self.max_flights < 1:
             raise ConfigError("stride, max_value_iterations and max_flights must be at least 1")
+        if not self.max_memory_gib > 0:
+            raise ConfigError(f"max_memory_gib must be positive, got {self.max_memory_gib}")
         if self.envelope not in ("dense", "stencil"):
             raise ConfigError(f"envelope must be 'dense' or 'stencil', got '{self.envelope}'")
         if self.refine_rounds < 0 or self.cloud_half_width < 1 or self.stencil_radius < 1:
@@ -104,7 +110,10 @@ def legs_objective(problem: DriftProblem, legs: list[Leg]) -> float:
     return float(problem.energy.flight_energy_wh(flown)) + problem.time_weight_wh_per_h * hours
 
 
-def sample_drift(problem: DriftProblem, points: FloatArray, stride: int) -> SampledDrift:
+def sample_drift(
+    problem: DriftProblem, points: FloatArray, stride: int, t0_s: float | None = None
+) -> SampledDrift:
+    """Drift ``(P, 2)`` points from ``t0_s`` (the problem's start time by default) over the horizon."""
     roll = problem.propagator.rollout(
         problem.space,
         points,
@@ -112,7 +121,7 @@ def sample_drift(problem: DriftProblem, points: FloatArray, stride: int) -> Samp
         goal_m=problem.goal_m,
         goal_tolerance_m=problem.goal_tolerance_m,
         stride=stride,
-        t0_s=problem.t0_s,
+        t0_s=problem.t0_s if t0_s is None else t0_s,
     )
     samples = np.concatenate([roll.samples_m, roll.closest_m[None]], axis=0)
     n = points.shape[0]
@@ -389,6 +398,66 @@ def extract_plan(
         finish = float(node_traj.finish[p])
         goal_step = int(node_traj.goal_step[p])
     return finish_direct(lattice, legs, samples, steps)
+
+
+def extract_in_time(lattice: ValueLattice, max_flights: int) -> list[Leg] | None:
+    """Greedy extraction for a time-varying field: every leg drifts from its own start time.
+
+    The lattice values (computed from the start time) only rank the landing points; the drift from each
+    landing is integrated afresh from the time the vehicle lands there (start time plus the drift and
+    flight time so far), so the take-off points are those of the flown path. Because the values are only
+    an estimate in a time-varying field, every step also keeps the exact plan "what is flown so far, then
+    drift into the goal or fly straight to it", and the cheapest of these (by :func:`legs_objective`) is
+    returned if it beats the greedy plan.
+    """
+    problem = lattice.problem
+    dt, speed = problem.propagator.dt_s, problem.energy.flight_speed_mps
+    pos = problem.start_m
+    t = problem.t0_s
+    legs: list[Leg] = []
+    promised = math.inf
+    best: list[Leg] | None = None
+    best_cost = math.inf
+
+    def consider(plan: list[Leg] | None) -> None:
+        nonlocal best, best_cost
+        if plan is None:
+            return
+        cost = legs_objective(problem, plan)
+        if cost < best_cost - 1e-9:
+            best, best_cost = plan, cost
+
+    for _ in range(max_flights):
+        traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
+        samples = traj.samples[:, 0].copy()
+        steps = traj.steps[:, 0]
+        into_goal = Leg(drift_steps=int(traj.goal_step[0]), takeoff=None, landing=None, to_goal=False)
+        if bool(traj.reaches[0]):
+            consider([*legs, into_goal])
+        consider(finish_direct(lattice, list(legs), samples, steps))
+        if legs and not math.isfinite(lattice.leg):
+            samples[0] = np.nan
+        v, s, j = lattice.best_takeoff(samples, traj.time_cost[:, 0], traj.goal_cost[:, 0])
+        if float(traj.finish[0]) <= v or not math.isfinite(v):
+            break
+        if v > promised + lattice.opts.spacing_m and legs:
+            break
+        promised = v
+        landing = lattice.landings[j]
+        is_goal = j == lattice.n_free
+        takeoff = samples[s].copy()
+        legs.append(Leg(drift_steps=int(steps[s]), takeoff=takeoff, landing=landing, to_goal=is_goal))
+        if is_goal:
+            consider(list(legs))
+            break
+        if legs_objective(problem, legs) >= best_cost:
+            break  # what is flown already costs more than a complete plan found before
+        t += int(steps[s]) * dt + float(np.linalg.norm(landing - takeoff)) / speed
+        pos = np.asarray(landing, dtype=float)
+    else:
+        traj = sample_drift(problem, pos[None], lattice.opts.stride, t0_s=t)
+        consider(finish_direct(lattice, list(legs), traj.samples[:, 0], traj.steps[:, 0]))
+    return best
 
 
 def finish_direct(

@@ -7,6 +7,7 @@ optional HDOP term. Every planner is a function ``plan(problem, rng, budget) -> 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -73,6 +74,8 @@ class DriftProblem:
             raise ConfigError("start and goal must be finite (x, y) positions in metres")
         if not self.goal_tolerance_m > 0:
             raise ConfigError(f"goal tolerance must be positive, got {self.goal_tolerance_m}")
+        if not math.isfinite(self.t0_s):
+            raise ConfigError(f"start time t0_s must be finite, got {self.t0_s}")
         if not self.horizon_s > 0:
             raise ConfigError(f"planning horizon must be positive, got {self.horizon_s}")
         if not self.time_weight_wh_per_h >= 0:
@@ -100,6 +103,11 @@ class DriftProblem:
     def direct_flight_wh(self) -> float:
         """Baseline energy: fly straight from start to goal (the thesis' red line, 49.5 Wh)."""
         return float(self.energy.flight_energy_wh(self.direct_flight_m))
+
+    @property
+    def starts_in_goal(self) -> bool:
+        """The start already lies inside the goal disk (nothing to plan)."""
+        return self.direct_flight_m < self.goal_tolerance_m
 
     def validate_endpoints(self) -> str | None:
         """A message if the start or the goal is not a valid state, else ``None``."""
@@ -171,6 +179,9 @@ class DriftPlanResult:
     tree : SearchTree or None
         The search tree, for figures.
     message : str
+    direct_chosen : bool
+        The planner's own plan cost more than flying straight (or reached no goal), so the direct flight
+        was returned instead (:func:`oceanloc.planning.drift_rrt.direct.prefer_direct`).
     """
 
     status: PlanStatus
@@ -183,6 +194,7 @@ class DriftPlanResult:
     cost: float = float("nan")
     tree: SearchTree | None = None
     message: str = ""
+    direct_chosen: bool = False
 
     @property
     def success(self) -> bool:
@@ -191,7 +203,7 @@ class DriftPlanResult:
     @property
     def saving(self) -> float:
         """Fraction of the direct-flight energy saved (negative if the plan flies more)."""
-        if not self.success:
+        if not self.success or not self.direct_flight_wh > 0:
             return float("nan")
         return 1.0 - self.flight_energy_wh / self.direct_flight_wh
 
@@ -203,11 +215,30 @@ class DriftPlanResult:
             "message": self.message,
             "flight_energy_wh": self.flight_energy_wh if self.path is not None else None,
             "direct_flight_wh": self.direct_flight_wh,
-            "saving": self.saving if self.success else None,
+            "saving": self.saving if self.success and self.direct_flight_wh > 0 else None,
             "compute_s": self.compute_s,
             "iterations": self.iterations,
             "solutions": self.solutions,
             "cost": self.cost,
+            "direct_chosen": self.direct_chosen,
             "tree_nodes": None if self.tree is None else int(self.tree.parent.size),
             "path": None if self.path is None else self.path.to_record(),
         }
+
+
+def arrived_result(problem: DriftProblem) -> DriftPlanResult:
+    """The plan of a problem whose start lies inside the goal disk: stay (a one-point path, 0 Wh)."""
+    path = DriftPath(
+        points_m=problem.start_m[None], times_s=np.array([problem.t0_s]), flight=np.zeros(0, bool)
+    )
+    return DriftPlanResult(
+        status=PlanStatus.EXACT,
+        path=path,
+        flight_energy_wh=0.0,
+        direct_flight_wh=problem.direct_flight_wh,
+        compute_s=0.0,
+        solutions=1,
+        cost=0.0,
+        message=f"the start is {problem.direct_flight_m:g} m from the goal, inside its "
+        f"{problem.goal_tolerance_m:g} m disk: nothing to plan",
+    )

@@ -39,7 +39,9 @@ from typing import Literal
 import numpy as np
 
 from oceanloc.errors import ConfigError
+from oceanloc.models.currents import is_steady
 from oceanloc.models.paths import DriftPath
+from oceanloc.planning.drift_rrt.direct import prefer_direct
 from oceanloc.planning.drift_rrt.nearest import GrowingNearest
 from oceanloc.planning.drift_rrt.objective import ThesisCost
 from oceanloc.planning.drift_rrt.problem import (
@@ -48,7 +50,9 @@ from oceanloc.planning.drift_rrt.problem import (
     PlanBudget,
     PlanStatus,
     SearchTree,
+    arrived_result,
 )
+from oceanloc.planning.drift_rrt.resimulate import resimulate_plan
 
 ThesisMode = Literal["single", "optimality-seeking"]
 THESIS_MODES: tuple[str, ...] = ("single", "optimality-seeking")
@@ -80,6 +84,10 @@ class ThesisOptions:
         Skip rewires that would create a loop.
     keep_tree : bool
         Return the search tree (for figures).
+    compare_direct : bool
+        Return the direct flight instead of a solution that costs more flight energy than flying straight
+        (where the straight flight is feasible), saying so in the message; ``False`` returns DR-RRT*'s own
+        solution whatever it costs.
     """
 
     mode: ThesisMode = "single"
@@ -92,6 +100,7 @@ class ThesisOptions:
     cost: ThesisCost = field(default_factory=ThesisCost)
     prevent_cycles: bool = True
     keep_tree: bool = False
+    compare_direct: bool = True
 
     def __post_init__(self) -> None:
         if self.mode not in THESIS_MODES:
@@ -150,7 +159,12 @@ def plan_thesis(
             compute_s=0.0,
             message=invalid,
         )
-    return _DrRrtStar(problem, rng, budget, opts, tic).run()
+    if problem.starts_in_goal:
+        return arrived_result(problem)
+    result = _DrRrtStar(problem, rng, budget, opts, tic).run()
+    if not opts.compare_direct:
+        return result
+    return prefer_direct(problem, result, replace_unsolved=False)
 
 
 class _DrRrtStar:
@@ -190,6 +204,7 @@ class _DrRrtStar:
         self.X = [sx]
         self.Y = [sy]
         self.T = [problem.t0_s]
+        self.steady = is_steady(problem.propagator.field)
         self.parent = [0]
         self.hop = [False]
         self.branch = [0.0]
@@ -288,7 +303,7 @@ class _DrRrtStar:
                 if d < tol:
                     solutions += 1
                     self._evaluate_pending()
-                    path = self._path(node)
+                    path = self._flown(node)
                     wh = self._energy(path)
                     if wh < best_wh:
                         best_wh, best_path, best_cost = wh, path, self.cum[node]
@@ -341,7 +356,7 @@ class _DrRrtStar:
                 closest = (dnew, new)
             if dnew < tol or (nx == gx and ny == gy):
                 solutions += 1
-                path = self._path(new)
+                path = self._flown(new)
                 wh = self._energy(path)
                 if wh < best_wh:
                     best_wh, best_path, best_cost = wh, path, self.cum[new]
@@ -389,6 +404,19 @@ class _DrRrtStar:
         # The thesis merges consecutive hops into one flight; over no-fly zones the chain must stay.
         return path if self.p.space.flights_avoid_obstacles else path.merged()
 
+    def _flown(self, node: int) -> DriftPath:
+        """The solution path through ``node`` as flown.
+
+        In a steady field the tree's own path. In a time-varying field the tree's drift branches were
+        integrated from their nodes' times, but rewiring and merging hops change when the vehicle reaches
+        a node, so the path is re-simulated from the start time (each drift from its own start time) and,
+        if it then misses the goal disk, finished with a straight flight to the goal.
+        """
+        path = self._path(node)
+        if self.steady:
+            return path
+        return resimulate_plan(self.p, path, finish_to_goal=True).path
+
     def _energy(self, path: DriftPath) -> float:
         return float(self.p.energy.flight_energy_wh(path.flight_distance_m))
 
@@ -427,6 +455,8 @@ class _DrRrtStar:
                 message=f"{solutions} solution(s) in {iterations} iterations, {len(self.X)} nodes",
             )
         path = self._path(closest)
+        if not self.steady:
+            path = resimulate_plan(self.p, path).path
         return DriftPlanResult(
             status=PlanStatus.APPROXIMATE,
             path=path,
