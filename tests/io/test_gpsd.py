@@ -20,8 +20,7 @@ from hypothesis import strategies as st
 
 from oceanloc.errors import DataError
 from oceanloc.io.gpsd import GpsdClient, GpsdReportParser, read_gpsd_lines
-from oceanloc.io.lines import GpsFix, Heading
-from oceanloc.io.nmea import format_gga, format_hdt, format_zda
+from oceanloc.io.nmea import GpsFix, Heading, format_gga, format_hdt, format_zda
 from oceanloc.io.qc import QcReport
 from oceanloc.io.streams import open_position_stream
 

@@ -4,25 +4,36 @@ import datetime as dt
 from pathlib import Path
 
 import numpy as np
+import pynmea2
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from oceanloc.errors import DataError
-from oceanloc.io.lines import (
+from oceanloc.io import lines
+from oceanloc.io.nmea import (
     GpsFix,
     Heading,
     NmeaLineParser,
-    UsblLineParser,
-    decode_line,
+    format_gga,
+    format_hdt,
+    format_zda,
     gps_log_from_records,
-    range_log_from_records,
+    read_nmea,
 )
-from oceanloc.io.nmea import format_gga, format_hdt, format_zda, read_nmea
-from oceanloc.io.qc import QcReport
-from oceanloc.io.usbl import read_usbl
+from oceanloc.io.qc import QcReport, decode_line
+from oceanloc.io.usbl import UsblLineParser, range_log_from_records, read_usbl
 
 T0 = dt.datetime(2018, 1, 4, 18, 0, tzinfo=dt.UTC)
+
+
+def _with_field(sentence: str, index: int, value: str) -> bytes:
+    """``sentence`` with field ``index`` (0: the talker and type) replaced and a valid checksum."""
+    fields = sentence.split("*")[0][1:].split(",")
+    fields[index] = value
+    return str(pynmea2.parse("$" + ",".join(fields))).encode()
+
+
 FUZZ = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 NMEA_POOL = [
@@ -42,6 +53,12 @@ NMEA_POOL = [
     b"\xc3\x28 not UTF-8",
     b"$GPGGA\x00,1",
     b"   ",
+    # The readers' range checks: latitude, height, time of day, date, heading.
+    format_gga(T0 + dt.timedelta(seconds=8), 95.0, -117.236, -1.478).encode(),
+    format_gga(T0 + dt.timedelta(seconds=9), 32.7, -117.2, 2e4).encode(),
+    _with_field(format_gga(T0, 32.7, -117.2, 0.0), 1, "186000.00"),
+    _with_field(format_zda(T0), 4, "2150"),
+    str(pynmea2.HDT("GP", "HDT", ("400.0", "T"))).encode(),
 ]
 
 
@@ -95,6 +112,12 @@ USBL_POOL = [
     "not-a-time,1,2.0",
     "# a comment",
     "2018-01-04T18:00:05.000Z,2,20000",
+    # The reader's newer rules: zone offsets, time and beacon-id ranges, a header switching the column.
+    "2018-01-04T20:00:06.000+02:00,1,4.0",
+    "2018-01-04T10:00:06.000 -0800,2,4.5",
+    "1970-01-01T00:00:01Z,1,4.0",
+    "2018-01-04T18:00:07Z,99999999999,4.0",
+    "utc,beacon,twtt_s",
 ]
 
 
@@ -134,3 +157,9 @@ def test_a_stream_without_a_header_needs_a_column_and_a_header_can_switch_it():
     assert first.range_m == 5.0 and first.travel_time_s is None
     assert second.range_m == pytest.approx(7.5) and second.travel_time_s == pytest.approx(0.005)
     assert second.to_record()["range_m"] == pytest.approx(7.5) and second.to_record()["status"] == "ok"
+
+
+def test_the_old_module_re_exports_the_one_implementation():
+    assert lines.NmeaLineParser is NmeaLineParser and lines.UsblLineParser is UsblLineParser
+    assert lines.decode_line is decode_line and lines.GpsFix is GpsFix and lines.Heading is Heading
+    assert sorted(lines.__all__) == sorted(n for n in vars(lines) if not n.startswith("_"))

@@ -239,6 +239,17 @@ def test_usbl_duplicated_lines_are_used_once(tmp_path: Path):
     np.testing.assert_array_equal(log.line, [2, 4, 6, 8, 10, 12])
 
 
+def test_usbl_a_later_header_switches_the_column(tmp_path: Path):
+    """Two logs joined: the second header is a header (not a bad line) and its column applies after it."""
+    path = tmp_path / "joined.csv"
+    path.write_text(
+        "utc,beacon,range_m\n2018-01-04T18:00:00Z,1,3.0\nutc,beacon,twtt_s\n2018-01-04T18:00:01Z,1,0.004\n"
+    )
+    log = read_usbl(path, sound_speed_mps=1500.0)
+    np.testing.assert_allclose(log.range_m, [3.0, 3.0])
+    assert (log.qc.issues, log.qc.lines_read, log.qc.records_kept) == ([], 2, 2)
+
+
 @pytest.mark.parametrize(
     "stamp",
     [

@@ -13,8 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.io.lines import GpsFix, Heading, RangeRecord
-from oceanloc.io.nmea import format_gga, format_hdt, format_zda
+from oceanloc.io.nmea import GpsFix, Heading, format_gga, format_hdt, format_zda
 from oceanloc.io.streams import (
     NmeaStream,
     RangeTextStream,
@@ -25,6 +24,7 @@ from oceanloc.io.streams import (
     parse_spec,
 )
 from oceanloc.io.transports import UdpLineSource
+from oceanloc.io.usbl import RangeRecord
 from oceanloc.sim.seatrac_beacon import BeaconSimConfig, SeatracBeaconSimulator
 
 T0 = dt.datetime(2018, 1, 4, 18, 0, tzinfo=dt.UTC)

@@ -9,7 +9,7 @@ port 2947. The client sends ``?WATCH={"enable":true,"json":true}`` and reads:
 - ``ATT`` with a ``heading`` (gpsd reports a true heading, such as NMEA HDT, this way); a ``HDG``
   object with a ``heading`` is read the same way.
 
-Records are the NMEA reader's (:class:`~oceanloc.io.lines.GpsFix`, :class:`~oceanloc.io.lines.Heading`)
+Records are the NMEA reader's (:class:`~oceanloc.io.nmea.GpsFix`, :class:`~oceanloc.io.nmea.Heading`)
 and so are the rules: ``mode`` below 2 is ``invalid fix``; a 2D fix without any altitude is
 ``invalid fix`` too (a height is needed for ENU); a latitude outside [-90, 90] or a longitude outside
 [-180, 180] is ``out-of-range value``; a NaN is ``NaN or infinite value``; a fix whose time does not
@@ -27,7 +27,7 @@ import math
 from collections.abc import Iterator
 
 from oceanloc.errors import DataError
-from oceanloc.io.lines import GpsFix, Heading
+from oceanloc.io.nmea import GpsFix, Heading
 from oceanloc.io.qc import QcReport
 from oceanloc.io.transports import LineStream, TcpLineSource
 

@@ -6,6 +6,9 @@ date is skipped with reason ``no date``). Positions are WGS84 latitude, longitud
 (GGA altitude above the geoid plus the geoid separation). Fixes with quality 0 are skipped as
 ``invalid fix``; fixes whose time does not advance are skipped as ``time going backwards``; a value
 outside its physical range (latitude, longitude, height, date, heading) is skipped as ``out of range``.
+:class:`NmeaLineParser` holds these rules, one line at a time: :func:`read_nmea` feeds it a file's lines
+and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same fixes with
+the same QC issues; :func:`gps_log_from_records` turns the records into a :class:`GpsLog`.
 
 Example::
 
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -79,7 +83,8 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     ``186000.00``, ``246060`` or ``nan``), a date outside 1980-2099, a latitude outside [-90, 90] deg or a
     longitude outside [-180, 180] deg (or a hemisphere other than N/S, E/W), an ellipsoidal height
     outside :data:`~oceanloc.io.qc.HEIGHT_RANGE_M` or a heading outside [0, 360] deg makes its line a QC
-    issue (``file:line: reason``), never a returned fix or an exception.
+    issue (``file:line: reason``), never a returned fix or an exception. The lines go through
+    :class:`NmeaLineParser`, the rules a live stream applies too.
 
     Raises
     ------
@@ -88,66 +93,135 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     """
     p = Path(path)
     qc = QcReport() if qc is None else qc
-    date: dt.date | None = None
-    rows: list[tuple[float, float, float, float]] = []
-    lines: list[int] = []
-    headings: list[tuple[float, float, int]] = []
-    last_t = -np.inf
+    parser = NmeaLineParser()
+    fixes: list[GpsFix] = []
+    headings: list[Heading] = []
     for number, text in read_lines(p, qc):
+        rec = parser.feed(number, text, qc, p)
+        if isinstance(rec, GpsFix):
+            fixes.append(rec)
+        elif isinstance(rec, Heading):
+            headings.append(rec)
+    return gps_log_from_records(fixes, headings, qc, str(p))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GpsFix:
+    """One GPS fix: UTC Unix seconds, WGS84 degrees and ellipsoidal height (m); where it came from."""
+
+    t_unix_s: float
+    lat_deg: float
+    lon_deg: float
+    h_m: float
+    source: str = ""
+    line: int = 0
+
+    def to_record(self) -> dict:
+        return {
+            "t_unix_s": self.t_unix_s,
+            "lat_deg": self.lat_deg,
+            "lon_deg": self.lon_deg,
+            "h_m": self.h_m,
+            "source": self.source,
+            "line": self.line,
+        }
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Heading:
+    """A true heading (degrees clockwise from north) at ``t_unix_s`` (the latest fix's time when read)."""
+
+    t_unix_s: float
+    heading_deg: float
+    source: str = ""
+    line: int = 0
+
+    def to_record(self) -> dict:
+        return {
+            "t_unix_s": self.t_unix_s,
+            "heading_deg": self.heading_deg,
+            "source": self.source,
+            "line": self.line,
+        }
+
+
+class NmeaLineParser:
+    """NMEA 0183 lines one at a time, with every rule of the module docstring: :func:`read_nmea`'s loop,
+    and a live stream's (UDP, TCP, serial).
+
+    State: the date of the latest RMC or ZDA and the time of the latest fix kept. :meth:`feed` returns a
+    :class:`GpsFix`, a :class:`Heading` or None (a date sentence, or a line skipped and recorded in the
+    :class:`~oceanloc.io.qc.QcReport` as ``source:number: reason (detail)``).
+    """
+
+    __slots__ = ("date", "last_t")
+
+    def __init__(self) -> None:
+        self.date: dt.date | None = None
+        self.last_t = -math.inf
+
+    def feed(self, number: int, text: str, qc: QcReport, source: str | Path) -> GpsFix | Heading | None:
+        """The record of one line of text (already decoded, see :func:`~oceanloc.io.qc.decode_line`)."""
+        p = source
         start = text.find("$")
         if start < 0:
             qc.add(p, number, "truncated sentence", "no '$'")
-            continue
+            return None
         text = text[start:]
         try:
             msg = pynmea2.parse(text, check=True)
         except pynmea2.ChecksumError as exc:
             reason = "truncated sentence" if "missing" in str(exc) else "bad checksum"
             qc.add(p, number, reason, text[:40])
-            continue
+            return None
         except pynmea2.SentenceTypeError:
             qc.add(p, number, "unsupported sentence", text[:12])
-            continue
+            return None
         except (pynmea2.ParseError, ValueError) as exc:
             qc.add(p, number, "truncated sentence", str(exc)[:60])
-            continue
+            return None
         try:
             kind = msg.sentence_type
             if kind == "ZDA":
                 _checked_time(msg.timestamp)
-                date = _checked_date(msg.datetime.date())
-                continue
+                self.date = _checked_date(msg.datetime.date())
+                return None
             if kind == "HDT":
-                headings.append((last_t, _checked_heading(msg.heading), number))
-                continue
+                heading = _checked_heading(msg.heading)
+                return Heading(t_unix_s=self.last_t, heading_deg=heading, source=str(p), line=number)
             if kind == "RMC":
                 rmc_date = _rmc_date(msg)
                 if rmc_date is not None:
-                    date = rmc_date
+                    self.date = rmc_date
                 if msg.status != "A":
                     qc.add(p, number, "invalid fix", "RMC status V")
-                continue  # positions come from GGA, which carries the height
+                return None  # positions come from GGA, which carries the height
             if kind != "GGA":
                 qc.add(p, number, "unsupported sentence", kind)
-                continue
-            t, lat, lon, h = _gga_fix(msg, date)
+                return None
+            t, lat, lon, h = _gga_fix(msg, self.date)
         except _UnusableSentenceError as skip:
             qc.add(p, number, skip.reason, skip.detail)
-            continue
+            return None
         except (ValueError, TypeError, AttributeError, OverflowError) as exc:
             qc.add(p, number, "non-numeric field", str(exc)[:60])
-            continue
-        if t <= last_t:
-            qc.add(p, number, "time going backwards", f"{t - last_t:+.2f} s")
-            continue
-        last_t = t
-        rows.append((t, lat, lon, h))
-        lines.append(number)
-    qc.records_kept += len(rows)
-    if not rows:
-        raise DataError(f"{p}: no valid GPS fix ({qc.summary(max_lines=3)})")
-    a = np.asarray(rows)
-    hd = np.asarray(headings, dtype=float).reshape(-1, 3)
+            return None
+        if t <= self.last_t:
+            qc.add(p, number, "time going backwards", f"{t - self.last_t:+.2f} s")
+            return None
+        self.last_t = t
+        qc.records_kept += 1
+        return GpsFix(t_unix_s=t, lat_deg=lat, lon_deg=lon, h_m=h, source=str(p), line=number)
+
+
+def gps_log_from_records(
+    fixes: Sequence[GpsFix], headings: Sequence[Heading], qc: QcReport, source: str = "stream"
+) -> GpsLog:
+    """The :class:`GpsLog` of collected records, as :func:`read_nmea` returns it (DataError if no fix)."""
+    if not fixes:
+        raise DataError(f"{source}: no valid GPS fix ({qc.summary(max_lines=3)})")
+    a = np.asarray([(f.t_unix_s, f.lat_deg, f.lon_deg, f.h_m) for f in fixes], dtype=float)
+    hd = np.asarray([(h.t_unix_s, h.heading_deg) for h in headings], dtype=float).reshape(-1, 2)
     return GpsLog(
         t_unix_s=a[:, 0],
         lat_deg=a[:, 1],
@@ -155,9 +229,9 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
         h_m=a[:, 3],
         heading_t_unix_s=hd[:, 0],
         heading_deg=hd[:, 1],
-        line=np.asarray(lines, dtype=np.int64),
+        line=np.asarray([f.line for f in fixes], dtype=np.int64),
         qc=qc,
-        heading_line=hd[:, 2].astype(np.int64),
+        heading_line=np.asarray([h.line for h in headings], dtype=np.int64),
     )
 
 

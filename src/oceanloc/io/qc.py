@@ -4,7 +4,8 @@ Field logs contain what field logs contain: corrupt sentences, truncated lines, 
 minus one metre, a clock stepping backwards, a beacon nobody configured, an empty file, a file saved in
 the wrong encoding. Readers skip such lines, record each in a :class:`QcReport` and keep every valid
 line; nothing crashes and nothing valid is lost. :func:`read_lines` is the shared entry point that
-turns raw bytes into numbered text lines, recording lines that are not valid text.
+turns raw bytes into numbered text lines, recording lines that are not valid text; :func:`decode_line`
+is its rule for one line, which the live streams apply to each line they receive.
 """
 
 from __future__ import annotations
@@ -169,15 +170,28 @@ def read_lines(path: str | Path, qc: QcReport) -> Iterator[tuple[int, str]]:
             qc.add(p, 0, "wrong encoding", "UTF-16 byte-order mark but undecodable content")
             return
     for number, line in enumerate(raw.splitlines(), start=1):
-        if not line.strip():
-            continue
-        qc.lines_read += 1
-        if b"\x00" in line:
-            qc.add(p, number, "wrong encoding", "NUL bytes")
-            continue
-        try:
-            text = line.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            qc.add(p, number, "wrong encoding", f"not UTF-8 at byte {exc.start}")
-            continue
-        yield number, text.strip().lstrip("\ufeff")
+        text = decode_line(line, number, qc, p)
+        if text is not None:
+            yield number, text
+
+
+def decode_line(raw: bytes | str, number: int, qc: QcReport, source: str | Path) -> str | None:
+    """One raw line as stripped text, or None if it is blank or not valid text.
+
+    The one per-line rule of :func:`read_lines`, also used by the live streams (UDP, TCP, serial): a
+    blank line is not counted; any other line counts in ``qc.lines_read``; NUL bytes or invalid UTF-8
+    are recorded as ``wrong encoding`` (``source:number``) and give None. A leading byte-order mark is
+    dropped. A ``str`` (already decoded) is only checked for NUL characters.
+    """
+    if not raw.strip():
+        return None
+    qc.lines_read += 1
+    if ("\x00" if isinstance(raw, str) else b"\x00") in raw:
+        qc.add(source, number, "wrong encoding", "NUL bytes")
+        return None
+    try:
+        text = raw if isinstance(raw, str) else raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        qc.add(source, number, "wrong encoding", f"not UTF-8 at byte {exc.start}")
+        return None
+    return text.strip().lstrip("\ufeff")

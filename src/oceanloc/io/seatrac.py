@@ -47,8 +47,8 @@ from enum import IntEnum
 from typing import Any
 
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.io.lines import RangeRecord
 from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import RangeRecord
 
 
 class SeatracDecodeError(DataError):

@@ -12,14 +12,15 @@ Specs (:func:`parse_spec`)::
 
 Range lines over UDP, TCP or serial have the USBL CSV reader's format (``utc,beacon,range_m``; a header
 line may switch the column to ``owtt_s`` or ``twtt_s``; ``?column=owtt_s`` presets it). Every line goes
-through the file readers' rules (:mod:`oceanloc.io.lines`): a bad line is recorded in the stream's
+through the file readers' own line parsers (:class:`~oceanloc.io.nmea.NmeaLineParser`,
+:class:`~oceanloc.io.usbl.UsblLineParser`): a bad line is recorded in the stream's
 :class:`~oceanloc.io.qc.QcReport` as ``<spec>:<line number>: <reason> (<detail>)`` and skipped; a
 stream never raises anything but the project's errors (:class:`~oceanloc.errors.ConfigError` for a bad
 spec, :class:`~oceanloc.errors.DataError` for a source that cannot be opened or fails).
 
 Every stream has ``read(timeout_s) -> record | None``: the next record (a
-:class:`~oceanloc.io.lines.GpsFix`, :class:`~oceanloc.io.lines.Heading` or
-:class:`~oceanloc.io.lines.RangeRecord`), or None when nothing valid arrived within ``timeout_s``,
+:class:`~oceanloc.io.nmea.GpsFix`, :class:`~oceanloc.io.nmea.Heading` or
+:class:`~oceanloc.io.usbl.RangeRecord`), or None when nothing valid arrived within ``timeout_s``,
 so the survey loop can notice a silent link and act; and ``records(idle_timeout_s)``, an iterator
 that raises :class:`StreamTimeoutError` after ``idle_timeout_s`` of silence.
 """
@@ -34,7 +35,7 @@ from urllib.parse import parse_qsl, urlsplit
 
 from oceanloc.errors import ConfigError
 from oceanloc.io.gpsd import GpsdClient
-from oceanloc.io.lines import GpsFix, Heading, NmeaLineParser, RangeRecord, UsblLineParser
+from oceanloc.io.nmea import GpsFix, Heading, NmeaLineParser
 from oceanloc.io.qc import QcReport
 from oceanloc.io.seatrac import MsgType, SeatracPinger
 from oceanloc.io.transports import (
@@ -45,7 +46,7 @@ from oceanloc.io.transports import (
     TcpLineSource,
     UdpLineSource,
 )
-from oceanloc.io.usbl import RANGE_COLUMNS
+from oceanloc.io.usbl import RANGE_COLUMNS, RangeRecord, UsblLineParser
 
 SCHEMES: tuple[str, ...] = ("udp", "tcp", "serial", "gpsd", "seatrac")
 POSITION_SCHEMES: tuple[str, ...] = ("udp", "tcp", "serial", "gpsd")

@@ -16,8 +16,7 @@ from collections.abc import Iterator
 from typing import Protocol
 
 from oceanloc.errors import DataError
-from oceanloc.io.lines import decode_line
-from oceanloc.io.qc import QcReport
+from oceanloc.io.qc import QcReport, decode_line
 
 MAX_LINE_BYTES = 65536
 """A line longer than this is cut (and then recorded as truncated by the stream reading it)."""

@@ -13,7 +13,12 @@ turn-around removed), converted with the sound speed given to :func:`read_usbl`.
 non-numeric field, a NaN, a time outside :data:`~oceanloc.io.qc.TIME_RANGE_UNIX_S`, a beacon id out of
 range, a range not in ``(0, max_range_m]``, an unknown beacon id (when the known ids are given), a time
 earlier than the previous line, or the same time and beacon as an earlier line (``duplicate record``:
-the first is used) are skipped and recorded in the QC report.
+the first is used) are skipped and recorded in the QC report. A header line later in the file (two
+logs joined) switches the column from there on.
+
+:class:`UsblLineParser` holds these rules, one line at a time: :func:`read_usbl` feeds it a file's lines
+and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same ranges with
+the same QC issues; :func:`range_log_from_records` turns the records into a :class:`RangeLog`.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -72,95 +77,195 @@ def read_usbl(
     max_range_m: float = MAX_RANGE_M,
     qc: QcReport | None = None,
 ) -> RangeLog:
-    """Read a USBL range CSV (see the module docstring).
+    """Read a USBL range CSV (see the module docstring) through :class:`UsblLineParser`.
 
     Raises
     ------
+    ConfigError
+        If the sound speed is outside [1300, 1700] m/s or ``max_range_m`` is not positive and finite.
     DataError
-        If the file cannot be read, has no recognizable header, or holds no valid range.
+        If the file cannot be read, its first line is not a header, or it holds no valid range.
     """
     p = Path(path)
     qc = QcReport() if qc is None else qc
-    if not 1300.0 <= sound_speed_mps <= 1700.0:
-        raise ConfigError(f"sound speed {sound_speed_mps} m/s is outside [1300, 1700]")
-    if not (math.isfinite(max_range_m) and max_range_m > 0.0):
-        raise ConfigError(f"max_range_m {max_range_m} m must be positive and finite")
-    known = None if beacons is None else {int(b) for b in beacons}
-    columns: list[str] | None = None
-    rows: list[tuple[float, int, float]] = []
-    lines: list[int] = []
-    last_t = -math.inf
-    seen: dict[tuple[float, int], int] = {}  # (time, beacon) -> index in rows
-    for number, text in read_lines(p, qc):
+    parser = UsblLineParser(sound_speed_mps=sound_speed_mps, beacons=beacons, max_range_m=max_range_m)
+    records = [parser.feed(number, text, qc, p) for number, text in read_lines(p, qc)]
+    return range_log_from_records(records, qc, str(p))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RangeRecord:
+    """One range to a beacon, or one failed attempt (``status`` other than ``ok``, ``range_m`` None).
+
+    Attributes
+    ----------
+    t_unix_s : float
+        UTC Unix seconds of the range epoch.
+    beacon : int
+    range_m : float or None
+        Slant range, metres (None when the attempt failed).
+    status : str
+        ``ok``, or why there is no range (``timeout``, ``no response``, ...).
+    message : str
+        One line for the operator when the status is not ``ok``.
+    travel_time_s : float or None
+        One-way travel time the range came from, seconds, when the source gives one.
+    azimuth_deg, elevation_deg : float or None
+        USBL signal angles, degrees, when the source gives valid ones (kept for the journal).
+    source : str
+        The stream (spec, port or file) and ``line`` the number of the line read from it.
+    """
+
+    t_unix_s: float
+    beacon: int
+    range_m: float | None
+    status: str = "ok"
+    message: str = ""
+    travel_time_s: float | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+    source: str = ""
+    line: int = 0
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    def to_record(self) -> dict:
+        return {
+            "t_unix_s": self.t_unix_s,
+            "beacon": self.beacon,
+            "range_m": self.range_m,
+            "status": self.status,
+            "message": self.message,
+            "travel_time_s": self.travel_time_s,
+            "azimuth_deg": self.azimuth_deg,
+            "elevation_deg": self.elevation_deg,
+            "source": self.source,
+            "line": self.line,
+        }
+
+
+class UsblLineParser:
+    """USBL range lines one at a time, with every rule of the module docstring: :func:`read_usbl`'s
+    loop, and a live stream's (UDP, TCP, serial).
+
+    ``column`` presets the measurement column (``range_m``, ``owtt_s`` or ``twtt_s``) for a stream that
+    sends no header; a header line (``utc,beacon,range_m``) sets or changes it whenever it arrives.
+    Without a column (a file), a first line that is not a header is a :class:`DataError`. State: the
+    column, the time of the latest range kept and the beacons ranged at that time (a later line with the
+    same time and beacon is a ``duplicate record``; times never go back, so no older one can match).
+    """
+
+    __slots__ = ("_at_last_t", "column", "known", "last_t", "max_range_m", "sound_speed_mps")
+
+    def __init__(
+        self,
+        *,
+        sound_speed_mps: float = 1500.0,
+        beacons: Collection[int] | None = None,
+        max_range_m: float = MAX_RANGE_M,
+        column: str | None = None,
+    ) -> None:
+        if not 1300.0 <= sound_speed_mps <= 1700.0:
+            raise ConfigError(f"sound speed {sound_speed_mps} m/s is outside [1300, 1700]")
+        if not (math.isfinite(max_range_m) and max_range_m > 0.0):
+            raise ConfigError(f"max_range_m {max_range_m} m must be positive and finite")
+        if column is not None and column not in RANGE_COLUMNS:
+            raise ConfigError(f"range column {column!r} is not one of {', '.join(RANGE_COLUMNS)}")
+        self.sound_speed_mps = float(sound_speed_mps)
+        self.known = None if beacons is None else {int(b) for b in beacons}
+        self.max_range_m = float(max_range_m)
+        self.column = column
+        self.last_t = -math.inf
+        self._at_last_t: dict[int, tuple[float, int]] = {}  # beacon -> (range_m, line) at last_t
+
+    def feed(self, number: int, text: str, qc: QcReport, source: str | Path) -> RangeRecord | None:
+        """The range of one line of text (already decoded, see :func:`~oceanloc.io.qc.decode_line`), or
+        None (a header, a comment, or a line skipped and recorded as ``source:number: reason``)."""
+        p = source
         if text.startswith("#"):
             qc.lines_read -= 1
-            continue
+            return None
         fields = [f.strip() for f in text.split(",")]
-        if columns is None:
-            names = [f.lower() for f in fields]
-            if len(names) == 3 and names[0] == "utc" and names[1] == "beacon" and names[2] in RANGE_COLUMNS:
-                columns = names
-                qc.lines_read -= 1
-                continue
+        names = [f.lower() for f in fields]
+        if len(names) == 3 and names[0] == "utc" and names[1] == "beacon" and names[2] in RANGE_COLUMNS:
+            self.column = names[2]
+            qc.lines_read -= 1
+            return None
+        if self.column is None:
             raise DataError(
                 f"{p}:{number}: expected a header 'utc,beacon,range_m' (or owtt_s, twtt_s), got {text[:60]!r}"
             )
         if len(fields) != 3 or not all(fields):
             qc.add(p, number, "truncated sentence", f"{len(fields)} fields, expected 3")
-            continue
+            return None
         try:
             t = _parse_utc(fields[0])
         except (ValueError, OverflowError):
             qc.add(p, number, "non-numeric field", f"utc {fields[0][:40]!r} is not ISO 8601")
-            continue
+            return None
         try:
             beacon = int(fields[1])
             value = float(fields[2])
         except ValueError:
             qc.add(p, number, "non-numeric field", f"{fields[1][:12]!r}, {fields[2][:20]!r}")
-            continue
+            return None
         if problem := time_problem(t):
             qc.add(p, number, "out of range", problem)
-            continue
+            return None
         if not BEACON_ID_RANGE[0] <= beacon <= BEACON_ID_RANGE[1]:
             qc.add(p, number, "out of range", _beacon_problem(fields[1]))
-            continue
+            return None
         if not math.isfinite(value):
-            qc.add(p, number, "NaN or infinite value", columns[2])
-            continue
-        factor = RANGE_COLUMNS[columns[2]]
-        rng = value if factor == 0.0 else factor * sound_speed_mps * value
-        if not 0.0 < rng <= max_range_m:
-            qc.add(p, number, "negative or absurd range", f"{rng:.6g} m is not in (0, {max_range_m:g}] m")
-            continue
-        if known is not None and beacon not in known:
+            qc.add(p, number, "NaN or infinite value", self.column)
+            return None
+        factor = RANGE_COLUMNS[self.column]
+        rng = value if factor == 0.0 else factor * self.sound_speed_mps * value
+        if not 0.0 < rng <= self.max_range_m:
+            detail = f"{rng:.6g} m is not in (0, {self.max_range_m:g}] m"
+            qc.add(p, number, "negative or absurd range", detail)
+            return None
+        if self.known is not None and beacon not in self.known:
             qc.add(p, number, "unknown beacon id", str(beacon))
-            continue
-        if t < last_t:
-            qc.add(p, number, "time going backwards", f"{t - last_t:+.3f} s")
-            continue
-        if (first := seen.get((t, beacon))) is not None:
-            same = "the same range" if rows[first][2] == rng else f"another range ({rows[first][2]:g} m)"
-            qc.add(
-                p,
-                number,
-                "duplicate record",
-                f"beacon {beacon} at this time has {same} on line {lines[first]}",
-            )
-            continue
-        seen[(t, beacon)] = len(rows)
-        last_t = t
-        rows.append((t, beacon, rng))
-        lines.append(number)
-    qc.records_kept += len(rows)
-    if not rows:
-        raise DataError(f"{p}: no valid range ({qc.summary(max_lines=3)})")
-    t_arr, b_arr, r_arr = (np.asarray(c) for c in zip(*rows, strict=True))
+            return None
+        if t < self.last_t:
+            qc.add(p, number, "time going backwards", f"{t - self.last_t:+.3f} s")
+            return None
+        if t == self.last_t and (first := self._at_last_t.get(beacon)) is not None:
+            same = "the same range" if first[0] == rng else f"another range ({first[0]:g} m)"
+            detail = f"beacon {beacon} at this time has {same} on line {first[1]}"
+            qc.add(p, number, "duplicate record", detail)
+            return None
+        if t > self.last_t:
+            self._at_last_t.clear()
+            self.last_t = t
+        self._at_last_t[beacon] = (rng, number)
+        qc.records_kept += 1
+        owtt = None if factor == 0.0 else rng / self.sound_speed_mps
+        return RangeRecord(
+            t_unix_s=t, beacon=beacon, range_m=rng, travel_time_s=owtt, source=str(p), line=number
+        )
+
+
+def range_log_from_records(
+    records: Sequence[RangeRecord | None], qc: QcReport, source: str = "stream"
+) -> RangeLog:
+    """The :class:`RangeLog` of the ``ok`` records (None: no record), as :func:`read_usbl` returns it.
+
+    Raises
+    ------
+    DataError
+        If there is no ``ok`` record.
+    """
+    ok = [r for r in records if r is not None and r.ok and r.range_m is not None]
+    if not ok:
+        raise DataError(f"{source}: no valid range ({qc.summary(max_lines=3)})")
     return RangeLog(
-        t_unix_s=t_arr.astype(float),
-        beacon=b_arr.astype(np.int64),
-        range_m=r_arr.astype(float),
-        line=np.asarray(lines, dtype=np.int64),
+        t_unix_s=np.asarray([r.t_unix_s for r in ok], dtype=float),
+        beacon=np.asarray([r.beacon for r in ok], dtype=np.int64),
+        range_m=np.asarray([r.range_m for r in ok], dtype=float),
+        line=np.asarray([r.line for r in ok], dtype=np.int64),
         qc=qc,
     )
 
