@@ -59,6 +59,27 @@ class _Buffered:
     def _pop(self) -> bytes | None:
         return self._lines.popleft() if self._lines else None
 
+    def _read_socket_line(self, sock: socket.socket, timeout_s: float, *, datagrams: bool) -> bytes | None:
+        """The next whole line from ``sock`` within ``timeout_s`` (a datagram ends its last line; a
+        stream's end is a :class:`DataError`)."""
+        deadline = time.monotonic() + timeout_s
+        what = "UDP receive" if datagrams else "receive"
+        while (line := self._pop()) is None:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            sock.settimeout(left)
+            try:
+                data = sock.recv(65535 if datagrams else 65536)
+            except TimeoutError:
+                return None
+            except OSError as exc:
+                raise DataError(f"{self.name}: {what} failed ({exc})") from None
+            if not data and not datagrams:
+                raise DataError(f"{self.name}: connection closed by the other end")
+            self._feed(data, end_of_message=datagrams)
+        return line
+
 
 class UdpLineSource(_Buffered):
     """Lines from UDP datagrams received on ``host:port`` (port 0: any free port, see ``address``)."""
@@ -74,20 +95,7 @@ class UdpLineSource(_Buffered):
         self.address: tuple[str, int] = self._sock.getsockname()[:2]
 
     def read_line(self, timeout_s: float) -> bytes | None:
-        deadline = time.monotonic() + timeout_s
-        while (line := self._pop()) is None:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return None
-            self._sock.settimeout(left)
-            try:
-                data = self._sock.recv(65535)
-            except TimeoutError:
-                return None
-            except OSError as exc:
-                raise DataError(f"{self.name}: UDP receive failed ({exc})") from None
-            self._feed(data, end_of_message=True)
-        return line
+        return self._read_socket_line(self._sock, timeout_s, datagrams=True)
 
     def close(self) -> None:
         self._sock.close()
@@ -110,22 +118,7 @@ class TcpLineSource(_Buffered):
             raise DataError(f"{self.name}: send failed ({exc})") from None
 
     def read_line(self, timeout_s: float) -> bytes | None:
-        deadline = time.monotonic() + timeout_s
-        while (line := self._pop()) is None:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return None
-            self._sock.settimeout(left)
-            try:
-                data = self._sock.recv(65536)
-            except TimeoutError:
-                return None
-            except OSError as exc:
-                raise DataError(f"{self.name}: receive failed ({exc})") from None
-            if not data:
-                raise DataError(f"{self.name}: connection closed by the other end")
-            self._feed(data)
-        return line
+        return self._read_socket_line(self._sock, timeout_s, datagrams=False)
 
     def close(self) -> None:
         self._sock.close()
