@@ -40,6 +40,8 @@ Monte Carlo defaults. The AquaQuad thesis' scenarios ship as ``dillard-*.toml`` 
     ukf_alpha = 1e-3
     ukf_beta = 2.0
     ukf_kappa = 0.0
+    gate_probability = 0.999         # NIS gate (chi-square probability); 0 turns gating off
+    divergence_epochs = 20           # consecutive epochs beyond the gate that flag a divergence
 
     [montecarlo]
     runs = 100
@@ -113,6 +115,8 @@ class FilterSettings:
     ukf_alpha: float
     ukf_beta: float
     ukf_kappa: float
+    gate_probability: float = 0.999
+    divergence_epochs: int = 20
 
     def motion_model(self, kind: MotionKind, dt_s: float) -> LinearMotionModel:
         """The transition of ``kind`` at step ``dt_s`` with this scenario's ``Q``."""
@@ -250,6 +254,8 @@ def _filters(t: Table) -> FilterSettings:
         ukf_alpha=t.float("ukf_alpha", 1e-3, lo=0.0, lo_open=True, hi=1.0),
         ukf_beta=t.float("ukf_beta", 2.0, lo=0.0),
         ukf_kappa=t.float("ukf_kappa", 0.0, lo=-float(n) + 1e-9),
+        gate_probability=t.float("gate_probability", 0.999, lo=0.0, hi=1.0, hi_open=True),
+        divergence_epochs=t.int("divergence_epochs", 20, lo=1, hi=1_000_000),
     )
     t.check_unknown()
     return settings

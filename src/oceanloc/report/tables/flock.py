@@ -110,7 +110,19 @@ def filter_stats_table(result: DillardFiltersResult) -> Table:
         if result.is_thesis:
             row.append(f"{THESIS_RUN_TIME_S[key]:.2f}" if key in THESIS_RUN_TIME_S else "")
         table.add_row(*row)
+    table.caption = gate_caption(mc)
     return table
+
+
+def gate_caption(mc: FilterMonteCarlo) -> str:
+    """One line per run set: the NIS gate, the share of epochs it rejected and the runs that diverged."""
+    gate = mc.scenario.filters.gate_probability
+    head = f"NIS gate {gate:g}" if gate else "NIS gate off"
+    parts = [
+        f"{key} {100 * float(np.mean(v.gated_per_run)) / mc.times_s.size:.2f} {v.diverged_runs}/{mc.runs}"
+        for key, v in mc.variants.items()
+    ]
+    return f"{head}; gated epochs (%), diverged runs: " + ", ".join(parts)
 
 
 def lab_table(result: LabTdoaResult) -> Table:
