@@ -200,6 +200,9 @@ def delay_table(result: RecordingDelay) -> Table:
     table.add_column("value", justify="right")
     table.add_row("delay, arrival at A minus at B (s)", f"{est.delay_s:.9f}")
     table.add_row("delay (samples)", f"{est.delay_samples:.4f}")
+    sd = f"{est.delay_sd_s:.3g} ({est.delay_sd_samples:.3g} samples)" if np.isfinite(est.delay_sd_s) else "-"
+    table.add_row("delay sd, Cramer-Rao bound (s)", sd)
+    table.add_row("band used (Hz)", f"{est.band_hz[0]:.0f} .. {est.band_hz[1]:.0f}")
     table.add_row("heard first", f"{est.first} ({escape(Path(result.first_source).name)})")
     table.add_row("peak ratio (1)", f"{est.peak_ratio:.3g}")
     table.add_row("sample rate (Hz)", f"{est.sample_rate_hz:g}")
