@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.config.flock import FlockScenario, MotionKind
+from oceanloc.config.flock import FlockScenario, MotionKind, check_memory
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.bounds import measurement_information, pcrlb
 from oceanloc.estimation.gaussian import Gaussian
@@ -497,6 +497,7 @@ def filter_monte_carlo(
     every = max(1, round(0.1 / sc.dt_s))  # keep run 0's estimates every 0.1 s for the figures
     task = _FiltersTask(scenario=sc, variants=variants, block=2000, example_every=every)
     size = chunk_size or _default_chunk_size(sc.runs, executor)
+    check_memory(sc, min(size, sc.runs))
     parts = run_chunked(task, sc.runs, executor=executor, chunk_size=size, progress=progress)
     joined = concat_runs(parts, keep=("example",))
     nodes = scenario_nodes(sc, times)
@@ -790,6 +791,7 @@ def tracking_hdop_monte_carlo(
         raise ConfigError(f"{sc.name}: duration must exceed the {settle_s} s convergence time")
     every = max(1, round(0.05 / sc.dt_s))
     task = _TrackingTask(scenario=sc, every=every, settle_s=settle_s)
+    check_memory(sc, min(chunk_size or sc.runs, sc.runs))
     parts = run_chunked(task, sc.runs, executor=executor, chunk_size=chunk_size, progress=progress)
     joined = concat_runs(parts, keep=("truth", "estimates", "clean", "measured"))
     times = epoch_times(sc.dt_s, sc.duration_s)
