@@ -144,6 +144,11 @@ def lab_table(result: LabTdoaResult) -> Table:
         if result.is_thesis:
             cells.append(r.thesis or "-")
         table.add_row(*cells, _pm(r.mean, r.sd), _sig(r.median, 4))
+    gate = mc.scenario.filters.gate_probability
+    table.caption = (
+        f"{f'NIS gate {gate:g}' if gate else 'NIS gate off'}: {float(np.mean(mc.gated)):.1f} epochs gated per"
+        f" run; {int(np.sum(mc.diverged_epoch >= 0))}/{mc.runs} runs diverged"
+    )
     return table
 
 
