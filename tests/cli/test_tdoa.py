@@ -75,3 +75,22 @@ def test_no_files_is_a_usage_error():
     proc = _run()
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "give two WAV files A and B, or --example" in proc.stderr
+
+
+def test_tdoa_prints_the_cramer_rao_sd_and_rejects_short_recordings(tmp_path):
+    pa, pb = _write_pair(tmp_path, 37)
+    out = tmp_path / "t.json"
+    result = CliRunner().invoke(app, ["tdoa", str(pa), str(pb), "--json", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "delay sd, Cramer-Rao bound (s)" in result.output and "band used (Hz)" in result.output
+    payload = json.loads(out.read_text())
+    assert 0 < payload["delay_sd_samples"] < 0.05 and payload["method"] == "gcc-ml"
+    proc = subprocess.run(
+        [sys.executable, "-m", "oceanloc", "tdoa", str(pa), str(pb), "--max-delay", "10"],
+        capture_output=True,
+        text=True,
+        env=os.environ,
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if "too short" in line]
+    assert len(lines) == 1 and "delay search of +-10 s" in lines[0]

@@ -82,3 +82,24 @@ def test_a_four_state_constant_velocity_scenario_runs():
     assert set(mc.variants) == {"ekf", "ukf"}  # no controls when both use the same model
     assert mc.truth.shape == (mc.times_s.size, 4) and mc.variants["ukf"].mse_per_run.shape == (2, 4)
     assert list(mc.to_dataset()["state"].values) == ["x", "y", "u", "v"]
+
+
+def test_gate_and_divergence_reach_records_and_datasets(tmp_path):
+    # The thesis' bearing scenario has R = (1e-3 rad)^2 for noise of 0.0316 rad: NIS ~ 1000 x dof at every
+    # epoch, so every run is flagged diverged at its first epoch. With the default gate (0.999) the first
+    # 19 epochs are rejected; the 20th completes the streak and the gate reopens (re-acquisition); the
+    # block boundary (block = 2000 epochs) does not reset the streak.
+    sc = load_flock_scenario("dillard-filters").with_overrides(duration_s=11.0, runs=2)
+    sc = dataclasses.replace(sc, filters=dataclasses.replace(sc.filters, gate_probability=0.999))
+    mc = filter_monte_carlo(sc, filter_variants(sc, controls=False))
+    ekf = mc.to_record()["filters"]["ekf"]
+    assert ekf["diverged_runs"] == 2 and ekf["first_divergence_s"] == pytest.approx(sc.dt_s)
+    assert ekf["gated_epochs_mean"] == 19 and mc.to_record()["gate_probability"] == 0.999
+    ds = mc.to_dataset()
+    assert ds["diverged"].values.tolist() == [[1, 1], [1, 1]]
+    assert ds["gated_epochs"].attrs["units"] == "1" and ds["divergence_time"].attrs["units"] == "s"
+    write_netcdf(tmp_path / "mc.nc", ds, make_provenance(seed=sc.seed))
+    lab = load_flock_scenario("dillard-lab-tdoa").with_overrides(duration_s=3.0, runs=2)
+    rec = tracking_hdop_monte_carlo(lab, settle_s=1.0).to_record()
+    assert rec["gate_probability"] == 0.0 and rec["gated_epochs"]["mean"] == 0.0
+    assert rec["diverged_runs"] == len(rec["diverged_run_indices"])

@@ -40,9 +40,11 @@ def tdoa(
     example: bool = typer.Option(
         False, "--example", help="Use the sample pair shipped with oceanloc (its paths are printed)."
     ),
-    method: str = typer.Option("gcc-phat", "--method", help="xcorr or gcc-phat."),
+    method: str = typer.Option("gcc-ml", "--method", help="gcc-ml (default), gcc-phat or xcorr."),
     max_delay: float | None = typer.Option(None, "--max-delay", help="Search |delay| <= this (s)."),
-    band: str | None = typer.Option(None, "--band", help="Use only this band low,high (Hz)."),
+    band: str = typer.Option(
+        "auto", "--band", help="low,high (Hz), auto (the signal's band, detected) or all."
+    ),
     channel: int = typer.Option(0, "--channel", min=0, help="Channel of multi-channel files."),
     json_path: JsonOut = None,
     png: Annotated[
@@ -51,7 +53,9 @@ def tdoa(
 ) -> None:
     """Delay of A relative to B (arrival at A minus arrival at B; > 0: B heard the signal first).
 
-    Cross-correlation or GCC-PHAT with band-limited sub-sample interpolation of the peak; the peak ratio
+    Generalized cross-correlation (maximum-likelihood weighting by default, or PHAT, or plain) over the
+    signal's band, detected from the recordings, with band-limited sub-sample interpolation of the peak;
+    the delay's standard deviation is its Cramer-Rao bound from the measured SNR and band; the peak ratio
     (main correlation peak over the largest value outside its main lobe) says how unambiguous it is.
     Try it at once with --example (two synthetic recordings of an up-sweep, A 1.2345 ms after B).
     """
@@ -59,7 +63,12 @@ def tdoa(
     from oceanloc.report.tables.flock import delay_table
 
     first, second = _recordings(first, second, example)
-    band_hz = tuple(parse_floats(band, "--band", 2)) if band is not None else None
+    band_hz = (
+        {"auto": "auto", "all": None}.get(band)
+        if band in ("auto", "all")
+        else parse_floats(band, "--band", 2)
+    )
+    band_hz = tuple(band_hz) if isinstance(band_hz, list) else band_hz
     with progress_bar(3, "reading and correlating") as advance:
         res = estimate_recording_delay(
             first,

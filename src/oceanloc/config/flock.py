@@ -40,10 +40,19 @@ Monte Carlo defaults. The AquaQuad thesis' scenarios ship as ``dillard-*.toml`` 
     ukf_alpha = 1e-3
     ukf_beta = 2.0
     ukf_kappa = 0.0
+    gate_probability = 0.999         # NIS gate (chi-square probability); 0 turns gating off
+    divergence_epochs = 20           # consecutive epochs beyond the gate that flag a divergence
 
     [montecarlo]
     runs = 100
     seed = 2014
+
+Physical ranges: every field is checked against a range a real flock can have (positions within 1000 km,
+speeds up to 100 m/s, accelerations up to 100 m/s^2, prior sigmas from 1 um to 1000 km, measurement sigmas
+from a picosecond, a nanoradian or a micrometre up to a second, pi rad or 10 km, ``dt`` from 1 us to an
+hour, at most 10 million steps), so that a typo gives an error naming file, table, field and range instead
+of NaN results or a LinAlgError; and the memory a Monte Carlo would hold (:func:`memory_estimate_bytes`)
+is checked before anything is allocated (:func:`check_memory`).
 
 Motion models: ``constant-acceleration`` is ``Phi = exp(A dt)`` of the full position-velocity-acceleration
 chain (the thesis' EKF, Figure 21); ``listing`` is the transition of the thesis' UKF listing (Appendix B),
@@ -68,6 +77,19 @@ from oceanloc.errors import ConfigError
 from oceanloc.models.measurements import MEASUREMENT_KINDS, MeasurementKind
 from oceanloc.models.motion import LinearMotionModel, constant_acceleration, constant_velocity
 from oceanloc.units import DEG
+
+MAX_POSITION_M = 1e6
+MAX_SPEED_MPS = 100.0
+MAX_ACCEL_MPS2 = 100.0
+MAX_STEPS = 10_000_000
+MEMORY_LIMIT_BYTES = 8 * 2**30
+"""Largest Monte Carlo working set a scenario may ask for (8 GiB)."""
+SIGMA_RANGE: dict[str, tuple[float, float, str]] = {
+    "bearing": (1e-9, np.pi, "rad"),
+    "range": (1e-6, 1e4, "m"),
+    "tdoa": (1e-12, 1.0, "s"),
+}
+"""Measurement standard deviations allowed per kind: (lowest, highest, unit)."""
 
 MotionKind: TypeAlias = Literal["constant-acceleration", "listing", "constant-velocity"]
 MOTION_KINDS: tuple[str, ...] = ("constant-acceleration", "listing", "constant-velocity")
@@ -113,6 +135,8 @@ class FilterSettings:
     ukf_alpha: float
     ukf_beta: float
     ukf_kappa: float
+    gate_probability: float = 0.999
+    divergence_epochs: int = 20
 
     def motion_model(self, kind: MotionKind, dt_s: float) -> LinearMotionModel:
         """The transition of ``kind`` at step ``dt_s`` with this scenario's ``Q``."""
@@ -183,9 +207,47 @@ def flock_scenario_toml(name_or_path: str | Path) -> str:
     return builtin_folder("flock").joinpath(f"{name_or_path}.toml").read_text(encoding="utf-8")
 
 
+def _bounded(t: Table, key: str, values: FloatArray, limits: FloatArray | float, unit: str, lo=None):
+    """Every ``|value| <= limit`` (and ``>= lo`` if given), else an error naming the field and range."""
+    lim = np.broadcast_to(np.asarray(limits, dtype=float), values.shape)
+    bad = np.abs(values) > lim
+    if lo is not None:
+        bad |= values < np.broadcast_to(np.asarray(lo, dtype=float), values.shape)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        low = -lim[i] if lo is None else np.broadcast_to(lo, values.shape)[i]
+        raise t.error(key, f"entry {i} must be within [{low:g}, {lim[i]:g}] {unit}, got {values[i]:g}")
+    return values
+
+
+def memory_estimate_bytes(epochs: int, runs: int, n_nodes: int, n_meas: int, n_state: int) -> int:
+    """Bytes a flock Monte Carlo chunk of ``runs`` holds at once (the tracking experiment, the larger).
+
+    Per epoch: the node positions and, per run, the truth, clean and noisy measurements, estimates,
+    innovations, residuals, HDOP and flags (``3 m + 2 n + 8`` floats), 8 bytes each.
+    """
+    return int(8 * epochs * (2 * n_nodes + runs * (3 * n_meas + 2 * n_state + 8)))
+
+
+def check_memory(scenario: FlockScenario, runs_at_once: int | None = None, where: str = "") -> None:
+    """Raise a ConfigError if the Monte Carlo would hold more than :data:`MEMORY_LIMIT_BYTES`."""
+    sc = scenario
+    runs = max(1, -(-sc.runs // 2)) if runs_at_once is None else runs_at_once
+    n_meas = sc.nodes.count * (sc.nodes.count - 1) // 2 if sc.kind == "tdoa" else sc.nodes.count
+    if sc.kind == "tdoa" and sc.pairs == "reference":
+        n_meas = sc.nodes.count - 1
+    need = memory_estimate_bytes(sc.epochs, runs, sc.nodes.count, n_meas, sc.filters.initial_state.size)
+    if need > MEMORY_LIMIT_BYTES:
+        raise ConfigError(
+            f"{where or sc.name}: {sc.epochs} epochs x {runs} run(s) at once need about"
+            f" {need / 2**30:.1f} GiB (limit {MEMORY_LIMIT_BYTES / 2**30:.0f} GiB); use a longer dt_s,"
+            " a shorter duration_s, fewer nodes or fewer runs"
+        )
+
+
 def _nodes(t: Table) -> NodeSettings:
     layout = t.str("layout", choices=("ring", "y", "fixed"))
-    center = t.vector("center_m", 2, [0.0, 0.0])
+    center = _bounded(t, "center_m", t.vector("center_m", 2, [0.0, 0.0]), MAX_POSITION_M, "m")
     positions = None
     count = 3
     if layout == "ring":
@@ -194,10 +256,19 @@ def _nodes(t: Table) -> NodeSettings:
         flat = t.vector("positions_m")
         if flat.size < 4 or flat.size % 2:
             raise t.error("positions_m", f"needs x, y pairs of at least two nodes, got {flat.size} numbers")
+        _bounded(t, "positions_m", flat, MAX_POSITION_M, "m")
         positions = flat.reshape(-1, 2)
         count = positions.shape[0]
-    radius = t.float("radius_m", 100.0, lo=0.0, lo_open=True) if layout != "fixed" else 0.0
-    drift = t.float("drift_speed_mps", 0.0, lo=-100.0, hi=100.0) if layout == "ring" else 0.0
+        if count > 1000:
+            raise t.error("positions_m", f"at most 1000 nodes, got {count}")
+        gaps = np.linalg.norm(positions[:, None] - positions[None], axis=-1) + np.diag(np.full(count, np.inf))
+        if gaps.min() < 1e-3:
+            i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
+            raise t.error(
+                "positions_m", f"nodes {i} and {j} are less than 1 mm apart (they must be distinct)"
+            )
+    radius = t.float("radius_m", 100.0, lo=1e-3, hi=MAX_POSITION_M) if layout != "fixed" else 0.0
+    drift = t.float("drift_speed_mps", 0.0, lo=-MAX_SPEED_MPS, hi=MAX_SPEED_MPS) if layout == "ring" else 0.0
     phase = t.float("phase_deg", 45.0 if layout == "ring" else 90.0, lo=-360.0, hi=360.0) * DEG
     t.check_unknown()
     return NodeSettings(
@@ -213,43 +284,53 @@ def _nodes(t: Table) -> NodeSettings:
 
 def _target(t: Table) -> TargetSettings:
     motion = t.str("motion", choices=("straight", "stop-and-go"))
-    start = t.vector("start_m", 2)
+    start = _bounded(t, "start_m", t.vector("start_m", 2), MAX_POSITION_M, "m")
     if motion == "straight":
-        settings = TargetSettings(motion="straight", start_m=start, velocity_mps=t.vector("velocity_mps", 2))
+        velocity = _bounded(t, "velocity_mps", t.vector("velocity_mps", 2), MAX_SPEED_MPS, "m/s")
+        settings = TargetSettings(motion="straight", start_m=start, velocity_mps=velocity)
     else:
         settings = TargetSettings(
             motion="stop-and-go",
             start_m=start,
             velocity_mps=np.zeros(2),
-            half_width_m=t.float("half_width_m", 2.0, lo=0.0, lo_open=True),
-            speed_mps=t.float("speed_mps", 0.5, lo=0.0, lo_open=True, hi=100.0),
-            mean_pause_s=t.float("mean_pause_s", 10.0, lo=0.0, lo_open=True),
+            half_width_m=t.float("half_width_m", 2.0, lo=1e-3, hi=1e5),
+            speed_mps=t.float("speed_mps", 0.5, lo=1e-3, hi=MAX_SPEED_MPS),
+            mean_pause_s=t.float("mean_pause_s", 10.0, lo=1e-3, hi=1e6),
         )
     t.check_unknown()
     return settings
 
 
-def _filters(t: Table) -> FilterSettings:
+def _filters(t: Table, kind: str) -> FilterSettings:
+    sig_lo, sig_hi_m, _unit = SIGMA_RANGE[kind]
     ekf_motion = t.str("ekf_motion", "constant-acceleration", choices=MOTION_KINDS)
     ukf_motion = t.str("ukf_motion", "constant-acceleration", choices=MOTION_KINDS)
     n = 4 if "constant-velocity" in (ekf_motion, ukf_motion) else 6
     if n == 4 and ekf_motion != ukf_motion:
         raise t.error("ukf_motion", "constant-velocity (4 states) cannot be mixed with a 6-state model")
-    x0 = t.vector("initial_state", n)
-    sig0 = t.vector("initial_sigma", n, positive=True)
-    q = t.vector("process_noise", n)
-    if np.any(q < 0):
-        raise t.error("process_noise", f"variances must be non-negative, got {q.tolist()}")
+    kin = np.array(
+        [MAX_POSITION_M, MAX_POSITION_M, MAX_SPEED_MPS, MAX_SPEED_MPS, MAX_ACCEL_MPS2, MAX_ACCEL_MPS2]
+    )
+    units = "m, m/s, m/s^2 (x, y, u, v, ax, ay)"
+    x0 = _bounded(t, "initial_state", t.vector("initial_state", n), kin[:n], units)
+    # Prior sigmas from 1 um (or um/s, um/s^2) to 1000 km (1000 m/s, 1000 m/s^2): their squares stay
+    # normal floats and the filters' covariances invertible.
+    sig_hi = np.array([1e6, 1e6, 1e3, 1e3, 1e3, 1e3])[:n]
+    sig0 = _bounded(t, "initial_sigma", t.vector("initial_sigma", n), sig_hi, units, lo=1e-6)
+    q_hi = np.array([1e6, 1e6, 1e4, 1e4, 1e4, 1e4])[:n]
+    q = _bounded(t, "process_noise", t.vector("process_noise", n), q_hi, "m^2, (m/s)^2, (m/s^2)^2", lo=0.0)
     settings = FilterSettings(
         initial_state=x0,
         initial_cov=np.diag(sig0**2),
         process_noise=np.diag(q),
-        measurement_sigma=t.float("measurement_sigma", lo=0.0, lo_open=True),
+        measurement_sigma=t.float("measurement_sigma", lo=sig_lo, hi=sig_hi_m),
         ekf_motion=ekf_motion,  # type: ignore[arg-type]
         ukf_motion=ukf_motion,  # type: ignore[arg-type]
         ukf_alpha=t.float("ukf_alpha", 1e-3, lo=0.0, lo_open=True, hi=1.0),
-        ukf_beta=t.float("ukf_beta", 2.0, lo=0.0),
-        ukf_kappa=t.float("ukf_kappa", 0.0, lo=-float(n) + 1e-9),
+        ukf_beta=t.float("ukf_beta", 2.0, lo=0.0, hi=100.0),
+        ukf_kappa=t.float("ukf_kappa", 0.0, lo=-float(n) + 1e-9, hi=100.0),
+        gate_probability=t.float("gate_probability", 0.999, lo=0.0, hi=1.0, hi_open=True),
+        divergence_epochs=t.int("divergence_epochs", 20, lo=1, hi=1_000_000),
     )
     t.check_unknown()
     return settings
@@ -259,11 +340,16 @@ def flock_scenario_from_table(root: Table) -> FlockScenario:
     """Validate a parsed flock scenario; every error names the file, table and field."""
     head = root.table("scenario")
     name = head.str("name")
+    if not name.strip():
+        raise head.error("name", "must not be empty")
     description = head.str("description", "")
-    dt = head.float("dt_s", lo=0.0, lo_open=True, hi=3600.0)
+    dt = head.float("dt_s", lo=1e-6, hi=3600.0)
     duration = head.float("duration_s", lo=dt, hi=1e7)
-    if duration / dt > 10_000_000:
-        raise head.error("duration_s", f"more than 10 million steps of {dt} s")
+    if duration / dt > MAX_STEPS:
+        raise head.error(
+            "duration_s",
+            f"{duration / dt:.3g} steps of {dt} s; at most {MAX_STEPS:,} (raise dt_s or shorten it)",
+        )
     head.check_unknown()
 
     nodes = _nodes(root.table("nodes"))
@@ -271,21 +357,22 @@ def flock_scenario_from_table(root: Table) -> FlockScenario:
 
     meas = root.table("measurement")
     kind = meas.str("kind", choices=MEASUREMENT_KINDS)
-    sigma_true = meas.float("sigma_true", lo=0.0)
+    hi_sig = SIGMA_RANGE[kind][1]
+    sigma_true = meas.float("sigma_true", lo=0.0, hi=hi_sig)
     sound_speed = meas.float("sound_speed_mps", 1500.0, lo=1000.0, hi=2000.0)
     pairs = meas.str("pairs", "all", choices=("all", "reference"))
     meas.check_unknown()
     if kind == "tdoa" and nodes.count < 2:
         raise meas.error("kind", "TDOA needs at least two nodes")
 
-    filters = _filters(root.table("filters"))
+    filters = _filters(root.table("filters"), kind)
 
     mc = root.table("montecarlo", required=False)
     runs = mc.int("runs", 100, lo=1, hi=1_000_000)
-    seed = mc.int("seed", 0, lo=0)
+    seed = mc.int("seed", 0, lo=0, hi=2**63 - 1)
     mc.check_unknown()
     root.check_unknown()
-    return FlockScenario(
+    scenario = FlockScenario(
         name=name,
         description=description,
         dt_s=dt,
@@ -300,3 +387,6 @@ def flock_scenario_from_table(root: Table) -> FlockScenario:
         runs=runs,
         seed=seed,
     )
+    # One run must fit (the step, the duration and the node count); the Monte Carlo checks its chunks.
+    check_memory(scenario, 1, where=f"{root.source}: [scenario] field 'dt_s'")
+    return scenario

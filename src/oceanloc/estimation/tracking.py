@@ -5,6 +5,17 @@ TDOA, the noise covariance ``R``, the TDOA pairs and sound speed); :func:`run_fi
 UKF over ``T`` epochs for ``B`` tracks at once and returns a :class:`TrackResult` with the estimates,
 covariances, innovations, NIS and HDOP at every epoch.
 
+Innovation gating and divergence detection (not in the thesis; needed where ``h`` is strongly nonlinear,
+e.g. a target passing within a few metres of a TDOA node): an epoch whose NIS exceeds the chi-square
+quantile ``chi2_dof^-1(gate_probability)`` is not used (the track keeps its prediction, so its covariance
+grows by ``Q`` until the measurements fit again), Bar-Shalom, Li & Kirubarajan (2001), Sec. 5.4.2. A gate
+alone can lock a track out for good (a wrong prediction rejects the right measurements and coasts away), so
+the epoch that completes ``divergence_epochs`` consecutive epochs outside the gate flags the track as
+*diverged* (at the first epoch of that streak) and opens its gate (that epoch's and the following
+measurements are used again, re-acquiring the target) until an epoch falls inside the gate. A consistent
+filter starts such a streak with probability ``(1 - gate_probability)^divergence_epochs`` per epoch
+(``1e-60`` for the defaults), i.e. never.
+
 Epoch convention (thesis Figure 18): the initial Gaussian is at ``t_0``; epoch ``k = 1 .. T`` predicts one
 step ``dt`` and then updates with the measurements ``z_k`` taken at ``t_k = t_0 + k dt``.
 """
@@ -38,6 +49,10 @@ from oceanloc.models.motion import LinearMotionModel
 
 FilterKind: TypeAlias = Literal["kf", "ekf", "ukf"]
 FILTER_KINDS: tuple[str, ...] = ("kf", "ekf", "ukf")
+DEFAULT_GATE_PROBABILITY = 0.999
+"""Chi-square probability of the NIS gate: a consistent filter loses 0.1 % of its epochs."""
+DEFAULT_DIVERGENCE_EPOCHS = 20
+"""Consecutive epochs beyond the gate that flag a track as diverged."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -181,6 +196,18 @@ class TrackResult:
         A covariance needed an eigenvalue repair (UKF).
     final : Gaussian
         Posterior after the last epoch, to continue the run.
+    gated : (B, T) bool
+        The epoch's measurements were rejected by the NIS gate (the estimate is the prediction).
+    outside_gate : (B, T) bool
+        The NIS exceeded the gate's chi-square quantile (equals ``gated`` when gating is on).
+    diverged_epoch : (B,) int
+        Index (0-based, into ``1 .. T``) of the first epoch of the first run of ``divergence_epochs``
+        consecutive epochs outside the gate; ``-1`` for a track that did not diverge.
+    streak : (B,) int
+        Consecutive epochs outside the gate at the end of the run (to continue it with ``initial_streak``).
+    gate_probability : float or None
+        The gate's chi-square probability (``None``: gating off; the 0.999 quantile still flags divergence).
+    divergence_epochs : int
     """
 
     filter: str
@@ -192,6 +219,31 @@ class TrackResult:
     hdop_m: FloatArray
     repaired: BoolArray
     final: Gaussian
+    gated: BoolArray
+    outside_gate: BoolArray
+    diverged_epoch: IntArray
+    gate_probability: float | None
+    divergence_epochs: int
+    streak: IntArray
+
+    @property
+    def diverged(self) -> BoolArray:
+        """``(B,)`` bool: the track diverged (see ``diverged_epoch``)."""
+        return self.diverged_epoch >= 0
+
+    @property
+    def gated_count(self) -> IntArray:
+        """``(B,)`` int: epochs whose measurements the gate rejected."""
+        return self.gated.sum(axis=-1)
+
+
+def nis_gate(probability: float, max_dof: int) -> FloatArray:
+    """Chi-square quantiles ``chi2_d^-1(probability)`` for ``d = 0 .. max_dof`` (``inf`` at ``d = 0``)."""
+    if not 0.0 < probability < 1.0:
+        raise ConfigError(f"gate probability must be in (0, 1), got {probability}")
+    from scipy.stats import chi2
+
+    return np.concatenate([[np.inf], chi2.ppf(probability, np.arange(1, max_dof + 1))])
 
 
 def filter_step(
@@ -212,6 +264,19 @@ def filter_step(
     sensors_m : (B, N, 2) or (N, 2) float
         Node positions at this epoch.
     """
+    return predict_update(kind, state, motion, sensor_model, z, sensors_m, params)[1]
+
+
+def predict_update(
+    kind: FilterKind,
+    state: Gaussian,
+    motion: LinearMotionModel,
+    sensor_model: FlockSensorModel,
+    z: FloatArray,
+    sensors_m: FloatArray,
+    params: SigmaPointParams,
+) -> tuple[Gaussian, UpdateResult]:
+    """:func:`filter_step` that also returns the prediction (what a gated epoch keeps)."""
     if kind == "ukf":
         pred = ukf_predict(state, lambda x: x @ motion.transition.T, motion.process_noise, params)
         sens = sensors_m[:, None] if sensors_m.ndim == 3 else sensors_m
@@ -223,10 +288,10 @@ def filter_step(
             params,
             angle_mask=sensor_model.angle_mask,
         )
-        return dataclasses.replace(upd, repaired=upd.repaired | pred.repaired)
+        return pred.state, dataclasses.replace(upd, repaired=upd.repaired | pred.repaired)
     prior = predict(state, motion)
     if kind == "ekf":
-        return ekf_update(
+        return prior, ekf_update(
             prior,
             z,
             lambda x: sensor_model.measure(x, sensors_m),
@@ -236,7 +301,8 @@ def filter_step(
         )
     if kind == "kf":
         # A linear measurement model given as the Jacobian at the prediction (exact when h is linear).
-        return kf_update(prior, z, sensor_model.jacobian(prior.mean, sensors_m), sensor_model.noise_cov)
+        jac = sensor_model.jacobian(prior.mean, sensors_m)
+        return prior, kf_update(prior, z, jac, sensor_model.noise_cov)
     raise ConfigError(f"filter must be one of {', '.join(FILTER_KINDS)}; got {kind!r}")
 
 
@@ -250,6 +316,9 @@ def run_filter(
     *,
     params: SigmaPointParams | None = None,
     record_covariances: bool = True,
+    gate_probability: float | None = DEFAULT_GATE_PROBABILITY,
+    divergence_epochs: int = DEFAULT_DIVERGENCE_EPOCHS,
+    initial_streak: ArrayLike | None = None,
 ) -> TrackResult:
     """Run a filter over a measurement sequence for ``B`` tracks at once.
 
@@ -268,6 +337,12 @@ def run_filter(
         UKF parameters (the thesis' ``alpha = 1e-3, beta = 2, kappa = 0`` by default).
     record_covariances : bool
         Keep every posterior covariance (``B T n^2`` floats).
+    gate_probability : float or None
+        NIS gate (module docstring); ``None`` accepts every epoch (the thesis' filters).
+    divergence_epochs : int
+        Consecutive epochs beyond the gate that flag a track as diverged (and open its gate).
+    initial_streak : (B,) int, optional
+        Epochs outside the gate carried over from a previous block of the same run (``TrackResult.streak``).
     """
     z = np.asarray(measurements, dtype=float)
     sens = np.asarray(sensors_m, dtype=float)
@@ -286,7 +361,14 @@ def run_filter(
             f" got {sens.shape}"
         )
     params = params or SigmaPointParams()
+    if divergence_epochs < 1:
+        raise ConfigError(f"divergence_epochs must be at least 1, got {divergence_epochs}")
     n, m = initial.dim, sensor_model.dim
+    gate = nis_gate(DEFAULT_GATE_PROBABILITY if gate_probability is None else gate_probability, m)
+    outside = np.empty((b, t_count), dtype=bool)
+    gated = np.zeros((b, t_count), dtype=bool)
+    streak = np.zeros(b, np.int64) if initial_streak is None else np.array(initial_streak, dtype=np.int64)
+    diverged_at = np.full(b, -1, dtype=np.int64)
     est = np.empty((b, t_count, n))
     covs = np.empty((b, t_count, n, n)) if record_covariances else None
     innov = np.empty((b, t_count, m))
@@ -296,8 +378,21 @@ def run_filter(
     state = initial
     for k in range(t_count):
         sk = sens[k] if shared else sens[:, k]
-        res = filter_step(kind, state, motion, sensor_model, z[:, k], sk, params)
-        state = res.state
+        prior, res = predict_update(kind, state, motion, sensor_model, z[:, k], sk, params)
+        out_k = res.nis > gate[res.dof]
+        outside[:, k] = out_k
+        streak = np.where(out_k, streak + 1, 0)
+        new = (streak == divergence_epochs) & (diverged_at < 0)
+        diverged_at[new] = k - divergence_epochs + 1
+        keep = out_k & (streak < divergence_epochs)  # gate open after a streak: re-acquire
+        gated[:, k] = keep
+        if gate_probability is not None and keep.any():
+            state = Gaussian(
+                mean=np.where(keep[:, None], prior.mean, res.state.mean),
+                cov=np.where(keep[:, None, None], prior.cov, res.state.cov),
+            )
+        else:
+            state = res.state
         est[:, k] = state.mean
         if covs is not None:
             covs[:, k] = state.cov
@@ -317,4 +412,10 @@ def run_filter(
         hdop_m=hd,
         repaired=rep,
         final=state,
+        gated=gated if gate_probability is not None else np.zeros_like(gated),
+        outside_gate=outside,
+        diverged_epoch=diverged_at,
+        gate_probability=gate_probability,
+        divergence_epochs=divergence_epochs,
+        streak=streak,
     )

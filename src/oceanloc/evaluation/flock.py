@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from oceanloc._typing import FloatArray
-from oceanloc.config.flock import FlockScenario, MotionKind
+from oceanloc.config.flock import FlockScenario, MotionKind, check_memory
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.bounds import measurement_information, pcrlb
 from oceanloc.estimation.gaussian import Gaussian
@@ -124,6 +124,10 @@ class FilterRunMetrics:
         Sum over the chunk's runs of the squared error at every epoch (one row per chunk).
     example : (T_dec, n) float
         Run 0's estimates at the decimated epochs (empty for chunks without run 0).
+    gated : (r,) int
+        Epochs whose measurements the NIS gate rejected, per run.
+    diverged_epoch : (r,) int
+        First epoch (0-based) of the run's divergence, ``-1`` if none (:func:`run_filter`).
     """
 
     sse: dict[str, FloatArray]
@@ -131,6 +135,17 @@ class FilterRunMetrics:
     seconds: dict[str, FloatArray]
     sq_err_sum: dict[str, FloatArray]
     example: dict[str, FloatArray]
+    gated: dict[str, FloatArray]
+    diverged_epoch: dict[str, FloatArray]
+
+
+def _gate_settings(scenario: FlockScenario) -> dict[str, Any]:
+    """``run_filter`` keywords of the scenario's NIS gate (probability 0 turns gating off)."""
+    f = scenario.filters
+    return {
+        "gate_probability": f.gate_probability or None,
+        "divergence_epochs": f.divergence_epochs,
+    }
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,7 +164,9 @@ class _FiltersTask:
         times, nodes, model, z = sim.times_s, sim.nodes_m, sim.sensor_model, sim.measurements
         n = sc.filters.initial_state.size  # 6, or 4 for the constant-velocity model
         truth = np.broadcast_to(sim.truth[..., :n], (r, *sim.truth.shape[-2:-1], n))
-        out = FilterRunMetrics(sse={}, nees_sum={}, seconds={}, sq_err_sum={}, example={})
+        out = FilterRunMetrics(
+            sse={}, nees_sum={}, seconds={}, sq_err_sum={}, example={}, gated={}, diverged_epoch={}
+        )
         for v in self.variants:
             motion = sc.filters.motion_model(v.motion, sc.dt_s)
             state = Gaussian.from_single(sc.filters.initial_state, sc.filters.initial_cov, r)
@@ -157,13 +174,26 @@ class _FiltersTask:
             per_epoch = np.zeros((times.size, state.dim))
             nees = np.zeros(r)
             keep = []
+            gated = np.zeros(r, dtype=np.int64)
+            diverged = np.full(r, -1, dtype=np.int64)
+            streak = np.zeros(r, dtype=np.int64)
             start = time.perf_counter()
             for k0 in range(0, times.size, self.block):
                 sl = slice(k0, min(k0 + self.block, times.size))
                 res = run_filter(
-                    v.filter, state, motion, model, z[:, sl], nodes[sl], params=_sigma_params(sc)
+                    v.filter,
+                    state,
+                    motion,
+                    model,
+                    z[:, sl],
+                    nodes[sl],
+                    params=_sigma_params(sc),
+                    initial_streak=streak,
+                    **_gate_settings(sc),
                 )
-                state = res.final
+                state, streak = res.final, res.streak
+                gated += res.gated_count
+                diverged = np.where((diverged < 0) & res.diverged, res.diverged_epoch + k0, diverged)
                 err = truth[:, sl] - res.estimates
                 sse += np.sum(err**2, axis=1)
                 per_epoch[sl] += np.sum(err**2, axis=0)
@@ -179,6 +209,8 @@ class _FiltersTask:
             out.sq_err_sum[v.key] = per_epoch[None]
             out.nees_sum[v.key] = nees
             out.example[v.key] = np.concatenate(keep) if keep else np.zeros((0, state.dim))
+            out.gated[v.key] = gated
+            out.diverged_epoch[v.key] = diverged
         return out
 
 
@@ -201,6 +233,10 @@ class VariantStats:
         Position RMSE over all runs and epochs / sqrt(time-averaged position PCRLB trace).
     example_estimates : (T_dec, n) float
         Run 0's estimates at the decimated epochs.
+    gated_per_run : (R,) int
+        Epochs rejected by the NIS gate, per run.
+    diverged_epoch : (R,) int
+        First epoch (0-based) of each run's divergence, ``-1`` if none.
     """
 
     variant: FilterVariant
@@ -210,6 +246,13 @@ class VariantStats:
     step_time_s: float
     rmse_over_sqrt_pcrlb: float
     example_estimates: FloatArray
+    gated_per_run: FloatArray
+    diverged_epoch: FloatArray
+
+    @property
+    def diverged_runs(self) -> int:
+        """Runs flagged as diverged."""
+        return int(np.sum(self.diverged_epoch >= 0))
 
     @property
     def mse_mean(self) -> FloatArray:
@@ -289,6 +332,11 @@ class FilterMonteCarlo:
             entry["nees_dof"] = n
             entry["rmse_over_sqrt_pcrlb"] = float(v.rmse_over_sqrt_pcrlb)
             entry["step_time_s"] = float(v.step_time_s)
+            entry["gated_epochs_mean"] = float(np.mean(v.gated_per_run))
+            entry["gated_fraction"] = float(np.mean(v.gated_per_run) / self.times_s.size)
+            entry["diverged_runs"] = v.diverged_runs
+            div = v.diverged_epoch[v.diverged_epoch >= 0]
+            entry["first_divergence_s"] = float(self.times_s[div.min()]) if div.size else None
             filters[key] = entry
         return {
             "scenario": self.scenario.name,
@@ -297,8 +345,14 @@ class FilterMonteCarlo:
             "seed": self.seed,
             "epochs": int(self.times_s.size),
             "dt_s": self.scenario.dt_s,
+            "gate_probability": self.scenario.filters.gate_probability,
+            "divergence_epochs": self.scenario.filters.divergence_epochs,
             "filters": filters,
         }
+
+    def _divergence_times(self, epochs: FloatArray) -> FloatArray:
+        idx = np.asarray(epochs, dtype=np.int64)
+        return np.where(idx >= 0, self.times_s[np.maximum(idx, 0)], np.nan)
 
     def to_dataset(self) -> xr.Dataset:
         """The Monte Carlo as a Dataset: per-run MSE ``(filter, run, state)``, RMSE and run 0's estimate
@@ -361,6 +415,21 @@ class FilterMonteCarlo:
                     ("filter",),
                     np.array([self.variants[k].rmse_over_sqrt_pcrlb for k in keys]),
                     {"long_name": "position RMSE over the square root of the mean PCRLB", "units": "1"},
+                ),
+                "gated_epochs": (
+                    ("filter", "run"),
+                    np.stack([self.variants[k].gated_per_run for k in keys]),
+                    {"long_name": "epochs rejected by the NIS gate", "units": "1"},
+                ),
+                "diverged": (
+                    ("filter", "run"),
+                    np.stack([self.variants[k].diverged_epoch >= 0 for k in keys]).astype(np.int8),
+                    {"long_name": "run flagged as diverged (1) or not (0)", "units": "1"},
+                ),
+                "divergence_time": (
+                    ("filter", "run"),
+                    np.stack([self._divergence_times(self.variants[k].diverged_epoch) for k in keys]),
+                    {"long_name": "time of the first epoch of the divergence (NaN: none)", "units": "s"},
                 ),
             },
             coords={
@@ -428,6 +497,7 @@ def filter_monte_carlo(
     every = max(1, round(0.1 / sc.dt_s))  # keep run 0's estimates every 0.1 s for the figures
     task = _FiltersTask(scenario=sc, variants=variants, block=2000, example_every=every)
     size = chunk_size or _default_chunk_size(sc.runs, executor)
+    check_memory(sc, min(size, sc.runs))
     parts = run_chunked(task, sc.runs, executor=executor, chunk_size=size, progress=progress)
     joined = concat_runs(parts, keep=("example",))
     nodes = scenario_nodes(sc, times)
@@ -446,6 +516,8 @@ def filter_monte_carlo(
             step_time_s=float(joined.seconds[v.key].sum() / (sc.runs * n_epochs)),
             rmse_over_sqrt_pcrlb=float(np.sqrt(mse_pos / np.mean(bound_pos))),
             example_estimates=joined.example[v.key],
+            gated_per_run=joined.gated[v.key],
+            diverged_epoch=joined.diverged_epoch[v.key],
         )
     return FilterMonteCarlo(
         scenario=sc,
@@ -475,6 +547,8 @@ class TrackingRunMetrics:
     estimates: FloatArray  # run 0, (T_dec, 6)
     clean: FloatArray  # run 0, (T_dec, m)
     measured: FloatArray  # run 0, (T_dec, m)
+    gated: FloatArray  # (r,) epochs rejected by the NIS gate
+    diverged_epoch: FloatArray  # (r,) first epoch of the divergence, -1 if none
 
 
 @dataclass(frozen=True, slots=True)
@@ -498,7 +572,15 @@ class _TrackingTask:
         motion = f.motion_model(f.ukf_motion, sc.dt_s)
         init = Gaussian.from_single(f.initial_state, f.initial_cov, r)
         res = run_filter(
-            "ukf", init, motion, model, z, nodes, params=_sigma_params(sc), record_covariances=False
+            "ukf",
+            init,
+            motion,
+            model,
+            z,
+            nodes,
+            params=_sigma_params(sc),
+            record_covariances=False,
+            **_gate_settings(sc),
         )
         err = truth[..., :2] - res.estimates[..., :2]
         residual = np.linalg.norm(err, axis=-1)
@@ -522,6 +604,8 @@ class _TrackingTask:
             estimates=res.estimates[0, keep],
             clean=clean[0, keep],
             measured=z[0, keep],
+            gated=res.gated_count,
+            diverged_epoch=res.diverged_epoch,
         )
 
 
@@ -552,6 +636,10 @@ class TrackingHdopMonteCarlo:
         Run 0.
     clean, measured : (T_dec, m) float
         Run 0's measurements before and after the noise.
+    gated : (R,) int
+        Epochs rejected by the UKF's NIS gate, per run.
+    diverged_epoch : (R,) int
+        First epoch (0-based, of the full time axis) of each run's divergence, ``-1`` if none.
     """
 
     scenario: FlockScenario
@@ -571,6 +659,8 @@ class TrackingHdopMonteCarlo:
     estimates: FloatArray
     clean: FloatArray
     measured: FloatArray
+    gated: FloatArray
+    diverged_epoch: FloatArray
 
     @property
     def noise_unit(self) -> str:
@@ -595,6 +685,10 @@ class TrackingHdopMonteCarlo:
             "residual_hdop_spearman": stat(self.spearman),
             f"mean_abs_noise_{self.noise_unit}": stat(self.mean_abs_noise),
             "nis_over_dof": stat(self.nis_ratio),
+            "gate_probability": self.scenario.filters.gate_probability,
+            "gated_epochs": stat(self.gated.astype(float)),
+            "diverged_runs": int(np.sum(self.diverged_epoch >= 0)),
+            "diverged_run_indices": [int(i) for i in np.flatnonzero(self.diverged_epoch >= 0)],
         }
 
     def to_dataset(self) -> xr.Dataset:
@@ -632,6 +726,16 @@ class TrackingHdopMonteCarlo:
                     {"long_name": "mean |injected noise|", "units": unit},
                 ),
                 "nis_ratio": (("run",), self.nis_ratio, {"long_name": "mean NIS over dof", "units": "1"}),
+                "gated_epochs": (
+                    ("run",),
+                    self.gated,
+                    {"long_name": "epochs rejected by the NIS gate", "units": "1"},
+                ),
+                "diverged": (
+                    ("run",),
+                    (self.diverged_epoch >= 0).astype(np.int8),
+                    {"long_name": "run flagged as diverged (1) or not (0)", "units": "1"},
+                ),
                 "residual": (
                     ("run", "epoch"),
                     self.residual_m,
@@ -687,6 +791,7 @@ def tracking_hdop_monte_carlo(
         raise ConfigError(f"{sc.name}: duration must exceed the {settle_s} s convergence time")
     every = max(1, round(0.05 / sc.dt_s))
     task = _TrackingTask(scenario=sc, every=every, settle_s=settle_s)
+    check_memory(sc, min(chunk_size or sc.runs, sc.runs))
     parts = run_chunked(task, sc.runs, executor=executor, chunk_size=chunk_size, progress=progress)
     joined = concat_runs(parts, keep=("truth", "estimates", "clean", "measured"))
     times = epoch_times(sc.dt_s, sc.duration_s)
@@ -708,4 +813,6 @@ def tracking_hdop_monte_carlo(
         estimates=joined.estimates,
         clean=joined.clean,
         measured=joined.measured,
+        gated=joined.gated,
+        diverged_epoch=joined.diverged_epoch,
     )

@@ -49,6 +49,8 @@ def test_stats_table_units_and_variants(filters):
     for header in ("pos. MSE (m²)", "NEES (1)", "RMSE/√PCRLB", "run (s)", "thesis (s)"):
         assert header in text
     assert text.count("EKF ctrl") == 1 and "constant-acceleration" in text and "0.85" in text
+    # The thesis' R is 1000 x too small for its noise: every epoch is outside the gate, every run diverges.
+    assert "NIS gate off; gated epochs (%), diverged runs: ekf 0.00 2/2, ukf 0.00 2/2" in text
 
 
 def test_another_scenario_has_no_thesis_columns():
@@ -66,6 +68,7 @@ def test_lab_table():
     _fits(text)
     assert "thesis (1 run) vs oceanloc (2 runs)" in text
     assert "peaks coincide (Fig. 67)" in text and "0.21" in text and "│ ms " in text
+    assert "NIS gate off: 0.0 epochs gated per run;" in text and "/2 runs diverged" in text
 
 
 def test_dop_tables_state_units_and_bearings_from_north():

@@ -110,7 +110,19 @@ def filter_stats_table(result: DillardFiltersResult) -> Table:
         if result.is_thesis:
             row.append(f"{THESIS_RUN_TIME_S[key]:.2f}" if key in THESIS_RUN_TIME_S else "")
         table.add_row(*row)
+    table.caption = gate_caption(mc)
     return table
+
+
+def gate_caption(mc: FilterMonteCarlo) -> str:
+    """One line per run set: the NIS gate, the share of epochs it rejected and the runs that diverged."""
+    gate = mc.scenario.filters.gate_probability
+    head = f"NIS gate {gate:g}" if gate else "NIS gate off"
+    parts = [
+        f"{key} {100 * float(np.mean(v.gated_per_run)) / mc.times_s.size:.2f} {v.diverged_runs}/{mc.runs}"
+        for key, v in mc.variants.items()
+    ]
+    return f"{head}; gated epochs (%), diverged runs: " + ", ".join(parts)
 
 
 def lab_table(result: LabTdoaResult) -> Table:
@@ -132,6 +144,11 @@ def lab_table(result: LabTdoaResult) -> Table:
         if result.is_thesis:
             cells.append(r.thesis or "-")
         table.add_row(*cells, _pm(r.mean, r.sd), _sig(r.median, 4))
+    gate = mc.scenario.filters.gate_probability
+    table.caption = (
+        f"{f'NIS gate {gate:g}' if gate else 'NIS gate off'}: {float(np.mean(mc.gated)):.1f} epochs gated per"
+        f" run; {int(np.sum(mc.diverged_epoch >= 0))}/{mc.runs} runs diverged"
+    )
     return table
 
 
@@ -188,6 +205,9 @@ def delay_table(result: RecordingDelay) -> Table:
     table.add_column("value", justify="right")
     table.add_row("delay, arrival at A minus at B (s)", f"{est.delay_s:.9f}")
     table.add_row("delay (samples)", f"{est.delay_samples:.4f}")
+    sd = f"{est.delay_sd_s:.3g} ({est.delay_sd_samples:.3g} samples)" if np.isfinite(est.delay_sd_s) else "-"
+    table.add_row("delay sd, Cramer-Rao bound (s)", sd)
+    table.add_row("band used (Hz)", f"{est.band_hz[0]:.0f} .. {est.band_hz[1]:.0f}")
     table.add_row("heard first", f"{est.first} ({escape(Path(result.first_source).name)})")
     table.add_row("peak ratio (1)", f"{est.peak_ratio:.3g}")
     table.add_row("sample rate (Hz)", f"{est.sample_rate_hz:g}")
