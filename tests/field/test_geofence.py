@@ -191,7 +191,10 @@ def fences(draw):
     angles = np.sort(
         np.array(draw(st.lists(st.floats(0.0, 2 * math.pi), min_size=n, max_size=n, unique=True)))
     )
-    if np.min(np.diff(np.r_[angles, angles[0] + 2 * math.pi])) < 0.05:
+    gaps = np.diff(np.r_[angles, angles[0] + 2 * math.pi])
+    # Star-shaped about the centre only while every angular gap is under pi: a wider gap lets the edge
+    # across it pass the centre's far side and cross other edges (a self-crossing ring, rightly refused).
+    if np.min(gaps) < 0.05 or np.max(gaps) >= math.pi - 0.05:
         angles = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
     radii = np.array(draw(st.lists(st.floats(50.0, 1_500.0), min_size=n, max_size=n)))
     pts = [(r * math.cos(a), r * math.sin(a)) for a, r in zip(angles, radii, strict=True)]
