@@ -11,7 +11,7 @@ import json
 
 import pytest
 
-from oceanloc.report.html.browser import find_chromium, load_page
+from oceanloc.report.html.browser import PLOTLY_READY, find_chromium, load_page
 from oceanloc.report.html.page import render_html
 from oceanloc.report.html.sources import load_report
 
@@ -21,11 +21,6 @@ pytestmark = pytest.mark.skipif(
     reason="chromium not installed (Debian: apt-get install chromium): browser tests skipped",
 )
 
-READY = (
-    "document.querySelectorAll('.plotly-graph-div').length > 0 && Array.from("
-    "document.querySelectorAll('.plotly-graph-div'))"
-    ".every(d => d._fullLayout && d.querySelector('.main-svg'))"
-)
 DOM = """JSON.stringify({
   kind: document.body.dataset.reportKind,
   checks: document.querySelectorAll('#checks tr.check').length,
@@ -56,7 +51,7 @@ def test_report_loads_offline_with_its_layers(sources, kind, tmp_path):
     rep = load_report(sources[kind])
     page = tmp_path / f"{kind}.html"
     page.write_text(render_html(rep), encoding="utf-8")
-    got = load_page(page, DOM, ready=READY, timeout_s=30.0)
+    got = load_page(page, DOM, ready=PLOTLY_READY, timeout_s=30.0)
     (tmp_path / f"{kind}.png").write_bytes(got.screenshot_png)
     assert got.screenshot_png[:8] == b"\x89PNG\r\n\x1a\n" and len(got.screenshot_png) > 20_000
     assert got.console_errors == []

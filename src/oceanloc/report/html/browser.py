@@ -23,6 +23,12 @@ from typing import Any
 
 CHROMIUM_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser", "chromium", "chromium-browser")
 LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:")
+PLOTLY_READY = (
+    "document.querySelectorAll('.plotly-graph-div').length > 0 && Array.from("
+    "document.querySelectorAll('.plotly-graph-div')).every("
+    "d => d._fullLayout && d.querySelector('.main-svg'))"
+)
+"""True once every plotly figure of a report page is drawn (the end of a load)."""
 
 
 def find_chromium() -> str | None:

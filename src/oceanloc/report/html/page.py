@@ -160,17 +160,18 @@ def map_figure(layers: MapLayers) -> go.Figure:
         tr = layers.track_en_m[idx]
         geo, geo_tpl = _hover_geo(layers, tr)
         name = layers.track_label
-        if idx.size < layers.track_en_m.shape[0]:
+        thinned = idx.size < layers.track_en_m.shape[0]
+        if thinned:  # drawn as a light line, no marker per point, so the estimates stay visible
             name += f" ({idx.size} of {layers.track_en_m.shape[0]} points drawn)"
         fig.add_trace(
             go.Scatter(
                 x=tr[:, 0],
                 y=tr[:, 1],
-                mode="lines+markers",
+                mode="lines" if thinned else "lines+markers",
                 name=name,
                 customdata=geo,
                 marker={"size": 3, "color": "#1f77b4"},
-                line={"color": "#1f77b4", "width": 1},
+                line={"color": "rgba(31,119,180,0.4)" if thinned else "#1f77b4", "width": 1},
                 hovertemplate=f"track<br>{hover_en}{geo_tpl}<extra></extra>",
             )
         )
@@ -502,11 +503,14 @@ def render_html(report: Report) -> str:
             "scale; drag to pan, scroll to zoom, hover for values.</p>"
         )
         parts.append(_div(map_figure(report.map), "map"))
+    checks = "<h2>Checks</h2>" + _checks(report) if report.checks else ""
+    if report.map is None:  # a record of statistics: its checks are what a reader looks for first
+        parts.append(checks)
     if report.series:
         parts.append("<h2>Time series</h2>")
         parts += [_div(series_figure(s), f"series-{i}") for i, s in enumerate(report.series)]
-    if report.checks:
-        parts.append("<h2>Checks</h2>" + _checks(report))
+    if report.map is not None:
+        parts.append(checks)
     for i, t in enumerate(report.tables):
         parts.append(f"<h2>{html.escape(t.title)}</h2>" + _table(t.header, t.rows, f"table-{i}"))
     if report.notes:
