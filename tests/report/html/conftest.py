@@ -61,3 +61,11 @@ def sources(tmp_path_factory) -> dict[str, Path]:
         assert res.exit_code == 0, res.output
         out[kind] = path
     return out
+
+
+@pytest.fixture(scope="session")
+def reports(sources) -> dict:
+    """kind -> its :class:`Report` (built once: a journal's report re-estimates the beacons)."""
+    from oceanloc.report.html.sources import load_report
+
+    return {kind: load_report(path) for kind, path in sources.items()}

@@ -13,7 +13,6 @@ import pytest
 
 from oceanloc.report.html.browser import PLOTLY_READY, find_chromium, load_page
 from oceanloc.report.html.page import render_html
-from oceanloc.report.html.sources import load_report
 
 pytest.importorskip("websocket", reason="websocket-client (PyPI) drives chromium's DevTools protocol")
 pytestmark = pytest.mark.skipif(
@@ -47,8 +46,8 @@ EXPECTED = {
 
 
 @pytest.mark.parametrize("kind", list(EXPECTED))
-def test_report_loads_offline_with_its_layers(sources, kind, tmp_path):
-    rep = load_report(sources[kind])
+def test_report_loads_offline_with_its_layers(sources, reports, kind, tmp_path):
+    rep = reports[kind]
     page = tmp_path / f"{kind}.html"
     page.write_text(render_html(rep), encoding="utf-8")
     got = load_page(page, DOM, ready=PLOTLY_READY, timeout_s=30.0)

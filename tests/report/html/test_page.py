@@ -7,7 +7,7 @@ import pytest
 from oceanloc.errors import DataError
 from oceanloc.report.html.model import Estimate, MapLayers, Report
 from oceanloc.report.html.page import MAX_TRACK_POINTS, map_figure, render_html
-from oceanloc.report.html.sources import detect_kind, load_report
+from oceanloc.report.html.sources import detect_kind
 
 KINDS = ("journal", "survey", "montecarlo", "gnssa", "reproduction", "drift")
 
@@ -34,8 +34,8 @@ def test_source_kind_is_detected(sources, kind):
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_page_is_self_contained(sources, kind):
-    page = render_html(load_report(sources[kind]))
+def test_page_is_self_contained(sources, reports, kind):
+    page = render_html(reports[kind])
     assert _outside_refs(page) == []
     assert page.count("<script") == page.count("</script>")
     # plotly's bundle once, in the head; the rest of the page names no web address at all
@@ -45,8 +45,8 @@ def test_page_is_self_contained(sources, kind):
     assert re.findall(r"https?://", body) == []
 
 
-def test_journal_map_has_every_fix_one_ellipse_per_beacon_and_the_checks(sources):
-    rep = load_report(sources["journal"])
+def test_journal_map_has_every_fix_one_ellipse_per_beacon_and_the_checks(sources, reports):
+    rep = reports["journal"]
     assert rep.map.track_en_m.shape == (600, 2) and rep.map.origin is not None
     names = _names(map_figure(rep.map))
     assert sorted(n for n in names if n.startswith("95% ellipse")) == [
@@ -61,8 +61,8 @@ def test_journal_map_has_every_fix_one_ellipse_per_beacon_and_the_checks(sources
     assert "excluded: outlier" in page and "beacon has too few" not in page
 
 
-def test_survey_ellipses_to_scale_with_magnified_inset(sources):
-    rep = load_report(sources["survey"])
+def test_survey_ellipses_to_scale_with_magnified_inset(sources, reports):
+    rep = reports["survey"]
     rec = json.loads(sources["survey"].read_text())
     fig = map_figure(rep.map)
     names = _names(fig)
@@ -78,36 +78,36 @@ def test_survey_ellipses_to_scale_with_magnified_inset(sources):
     assert any(s.name == "scale bar" for s in fig.layout.shapes)
 
 
-def test_no_inset_when_ellipses_are_visible(sources):
-    names = _names(map_figure(load_report(sources["journal"]).map))
+def test_no_inset_when_ellipses_are_visible(sources, reports):
+    names = _names(map_figure(reports["journal"].map))
     assert not any(n.startswith("inset") for n in names)
 
 
-def test_gnssa_one_ellipse_per_survey_and_spread_checks(sources):
-    rep = load_report(sources["gnssa"])
+def test_gnssa_one_ellipse_per_survey_and_spread_checks(sources, reports):
+    rep = reports["gnssa"]
     names = _names(map_figure(rep.map))
     assert sum(n.startswith("95% ellipse") for n in names) == 5
     assert len(rep.checks) == 6 and all("spread" in c.name for c in rep.checks)
     assert rep.series[0].title == "Sound speed estimated per survey"
 
 
-def test_reproduction_checks_and_paper_tables(sources):
+def test_reproduction_checks_and_paper_tables(sources, reports):
     rec = json.loads(sources["reproduction"].read_text())
-    rep = load_report(sources["reproduction"])
+    rep = reports["reproduction"]
     assert len(rep.checks) == len(rec["checks"]) and rep.map is None
     page = render_html(rep)
     assert page.count('<tr class="check ') == len(rec["checks"])
     assert "Table III: paper beside ours" in page and "RMSE paper (m)" in page
 
 
-def test_drift_legs_obstacles_and_current(sources):
-    names = _names(map_figure(load_report(sources["drift"]).map))
+def test_drift_legs_obstacles_and_current(sources, reports):
+    names = _names(map_figure(reports["drift"].map))
     assert {"flight legs", "drift legs", "goal tolerance", "current"} <= set(names)
     assert names.count("obstacle") == 2
 
 
-def test_montecarlo_has_no_map_and_the_nees_check(sources):
-    rep = load_report(sources["montecarlo"])
+def test_montecarlo_has_no_map_and_the_nees_check(sources, reports):
+    rep = reports["montecarlo"]
     assert rep.map is None and rep.checks[0].name.startswith("mean NEES at epoch 12")
 
 
@@ -144,3 +144,13 @@ def test_unknown_json_and_foreign_files_are_data_errors(tmp_path):
         detect_kind(tmp_path / "b.bin")
     with pytest.raises(DataError, match="no such file"):
         detect_kind(tmp_path / "missing.db")
+
+
+def test_journal_sigma_by_time_ends_at_the_final_ellipse(sources, reports):
+    rep = reports["journal"]
+    sigma = rep.series[0]
+    assert sigma.title.startswith("95 % ellipse semi-major axis by time")
+    finals = {e.label: e.semi_major_m for e in rep.map.estimates}
+    for name, _, y, _, _ in sigma.lines:
+        assert y[-1] == pytest.approx(finals[name], rel=1e-9)  # the last cut is the whole journal
+        assert y[-1] < y[0]  # more ranges, smaller ellipse

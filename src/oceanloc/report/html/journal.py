@@ -23,6 +23,11 @@ from oceanloc.io.records import file_sha256
 from oceanloc.io.usbl import align_ranges
 from oceanloc.report.html.model import Check, Estimate, MapLayers, Report, Series, Table
 
+SIGMA_CUTS = 6
+"""Times at which the estimates are recomputed from the journal's records so far (sigma by time)."""
+SIGMA_MAX_RANGES = 1500
+"""Above this many ranges the sigma-by-time panel is skipped (each cut is a full estimate)."""
+
 _REASONS = {
     "outlier": "excluded by the outlier rule",
     "no-gps": "no GPS fix within max_gap_s",
@@ -93,6 +98,14 @@ def journal_report(path: str | Path) -> Report:
     )
     t0 = float(records.fix_t_unix_s[0])
     series = [_residual_series(aligned.t_unix_s - t0, aligned.beacon, residual, status, has, t0)]
+    notes = []
+    if records.n_ranges <= SIGMA_MAX_RANGES:
+        series.insert(0, _sigma_series(records, settings, t0))
+    else:
+        notes.append(
+            f"Sigma by time skipped: {records.n_ranges} ranges (over {SIGMA_MAX_RANGES}); each point is a "
+            "full re-estimate from the records up to that time."
+        )
     checks = _checks(est, residual, status, aligned.beacon, settings.sigma_range_m)
     counts = {name: int(np.sum(est.range_status == k)) for k, name in enumerate(RANGE_STATUS)}
     summary = (
@@ -161,6 +174,45 @@ def journal_report(path: str | Path) -> Report:
         tables=(table,),
         checks=checks,
         provenance=prov,
+        notes=tuple(notes),
+    )
+
+
+def _prefix(r: JournalRecords, t_end: float) -> JournalRecords:
+    """The records up to ``t_end`` (inclusive), as the journal held them then."""
+    f, g, h = r.fix_t_unix_s <= t_end, r.range_t_unix_s <= t_end, r.heading_t_unix_s <= t_end
+    return JournalRecords(
+        fix_t_unix_s=r.fix_t_unix_s[f],
+        lat_deg=r.lat_deg[f],
+        lon_deg=r.lon_deg[f],
+        h_m=r.h_m[f],
+        range_t_unix_s=r.range_t_unix_s[g],
+        beacon=r.beacon[g],
+        range_m=r.range_m[g],
+        heading_t_unix_s=r.heading_t_unix_s[h],
+        heading_deg=r.heading_deg[h],
+    )
+
+
+def _sigma_series(records: JournalRecords, settings: JournalSettings, t0: float) -> Series:
+    """Semi-major axis of each beacon's 95 % ellipse, re-estimated at :data:`SIGMA_CUTS` times."""
+    cuts = np.linspace(t0, float(records.fix_t_unix_s[-1]), SIGMA_CUTS + 1)[1:]
+    by_beacon: dict[int, tuple[list[float], list[float]]] = {}
+    for t in cuts:
+        est = survey_estimates(_prefix(records, float(t)), settings)
+        for b, a in zip(est.beacons, est.ellipses.semi_major_m, strict=True):
+            by_beacon.setdefault(int(b), ([], []))
+            by_beacon[int(b)][0].append(float(t - t0))
+            by_beacon[int(b)][1].append(float(a))
+    return Series(
+        title="95 % ellipse semi-major axis by time (estimates from the records so far)",
+        x_label=f"time from {_utc(t0)} UTC (s)",
+        y_label="semi-major axis (m)",
+        log_y=True,
+        lines=tuple(
+            (f"beacon {b}", np.asarray(x), np.asarray(y), "lines+markers", None)
+            for b, (x, y) in by_beacon.items()
+        ),
     )
 
 
