@@ -11,9 +11,6 @@ from oceanloc.cli import root
 from oceanloc.cli._common import err_console, escape
 from oceanloc.cli._options import parse_origin
 from oceanloc.errors import DataError
-from oceanloc.report.html.kml_layers import report_kml
-from oceanloc.report.html.page import render_html
-from oceanloc.report.html.sources import load_report
 
 
 @root.app.command("report")
@@ -33,6 +30,11 @@ def report(
     ] = None,
 ) -> None:
     """Write an offline HTML report (map, time series, checks, provenance) of a journal or record."""
+    # imported here: plotly and scipy would slow every other `oceanloc` command's start
+    from oceanloc.report.html.kml_layers import report_kml
+    from oceanloc.report.html.page import render_html
+    from oceanloc.report.html.sources import load_report
+
     for out in (html, kml):
         if out is not None and not out.parent.is_dir():
             raise DataError(f"{out}: folder {out.parent} does not exist")

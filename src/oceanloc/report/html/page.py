@@ -435,11 +435,14 @@ def _checks(report: Report) -> str:
             f"<td>{html.escape(c.detail)}</td></tr>"
         )
     n_pass = sum(c.passed for c in report.checks)
-    return (
+    page = (
         f"<p>{n_pass} of {len(report.checks)} checks pass.</p>"
         '<table id="checks"><thead><tr><th>check</th><th>value</th><th>bound</th><th>verdict</th>'
         f"<th>detail</th></tr></thead><tbody>{''.join(rows)}</tbody></table>"
     )
+    if not any(c.value or c.bound for c in report.checks):  # e.g. a reproduction: the detail says it all
+        page = page.replace("<th>value</th><th>bound</th>", "").replace('<td class="num"></td><td></td>', "")
+    return page
 
 
 def _provenance(prov: dict) -> str:
