@@ -10,6 +10,7 @@ from oceanloc.cli import (  # noqa: F401
     drift_plan,
     localize,
     replay,
+    report,
     reproduce_dillard,
     reproduce_dillard_drrt,
     reproduce_garcia,

@@ -1,0 +1,156 @@
+import json
+import re
+
+import numpy as np
+import pytest
+
+from oceanloc.errors import DataError
+from oceanloc.report.html.model import Estimate, MapLayers, Report
+from oceanloc.report.html.page import MAX_TRACK_POINTS, map_figure, render_html
+from oceanloc.report.html.sources import detect_kind
+
+KINDS = ("journal", "survey", "montecarlo", "gnssa", "reproduction", "drift")
+
+
+def _names(fig) -> list[str]:
+    return [t.name for t in fig.data]
+
+
+def _outside_refs(page: str) -> list[str]:
+    """Every script src, link href, img/iframe src or CSS url() in the page that points off the file."""
+    pats = [
+        r"<script\b[^>]*\bsrc\s*=",
+        r"<link\b[^>]*\bhref\s*=",
+        r"<(?:img|iframe|source|video|audio|embed|object)\b[^>]*\b(?:src|data)\s*=\s*[\"']?(?:https?:)?//",
+        r"url\(\s*[\"']?(?:https?:)?//",
+        r"@import",
+    ]
+    return [m.group(0) for p in pats for m in re.finditer(p, page, flags=re.IGNORECASE)]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_source_kind_is_detected(sources, kind):
+    assert detect_kind(sources[kind])[0] == kind
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_page_is_self_contained(sources, reports, kind):
+    page = render_html(reports[kind])
+    assert _outside_refs(page) == []
+    assert page.count("<script") == page.count("</script>")
+    # plotly's bundle once, in the head; the rest of the page names no web address at all
+    assert page.count("plotly.js v") >= 1 and page.count('<script type="text/javascript">/**') == 1
+    head, body = page.split("</head>", 1)
+    assert "Content-Security-Policy" in head and "default-src 'none'" in head
+    assert re.findall(r"https?://", body) == []
+
+
+def test_journal_map_has_every_fix_one_ellipse_per_beacon_and_the_checks(sources, reports):
+    rep = reports["journal"]
+    assert rep.map.track_en_m.shape == (600, 2) and rep.map.origin is not None
+    names = _names(map_figure(rep.map))
+    assert sorted(n for n in names if n.startswith("95% ellipse")) == [
+        "95% ellipse beacon 1",
+        "95% ellipse beacon 2",
+    ]
+    track = next(t for t in map_figure(rep.map).data if t.name == "GPS track")
+    assert len(track.x) == 600 and track.customdata.shape == (600, 2)  # lat, lon in the hover
+    assert len(rep.checks) == 4 and len(rep.tables[0].rows) == 2
+    page = render_html(rep)
+    assert page.count('<tr class="check ') == 4
+    assert "excluded: outlier" in page and "beacon has too few" not in page
+
+
+def test_survey_ellipses_to_scale_with_magnified_inset(sources, reports):
+    rep = reports["survey"]
+    rec = json.loads(sources["survey"].read_text())
+    fig = map_figure(rep.map)
+    names = _names(fig)
+    assert sum(n.startswith("95% ellipse") for n in names) == 4
+    assert sum(n.startswith("inset ellipse") for n in names) == 4  # centimetre ellipses on a ~40 m map
+    ring = next(t for t in fig.data if t.name == "95% ellipse m=1")
+    t = rec["transponders"][0]
+    dist = np.hypot(np.asarray(ring.x) - t["estimate_enu_m"][0], np.asarray(ring.y) - t["estimate_enu_m"][1])
+    assert dist.max() == pytest.approx(t["ellipse95_semi_axes_m"][0], rel=1e-3)
+    assert dist.min() == pytest.approx(t["ellipse95_semi_axes_m"][1], rel=1e-2)
+    sites = next(t for t in fig.data if t.name.startswith("measurement sites"))
+    assert len(sites.x) == 40
+    assert any(s.name == "scale bar" for s in fig.layout.shapes)
+
+
+def test_no_inset_when_ellipses_are_visible(sources, reports):
+    names = _names(map_figure(reports["journal"].map))
+    assert not any(n.startswith("inset") for n in names)
+
+
+def test_gnssa_one_ellipse_per_survey_and_spread_checks(sources, reports):
+    rep = reports["gnssa"]
+    names = _names(map_figure(rep.map))
+    assert sum(n.startswith("95% ellipse") for n in names) == 5
+    assert len(rep.checks) == 6 and all("spread" in c.name for c in rep.checks)
+    assert rep.series[0].title == "Sound speed estimated per survey"
+
+
+def test_reproduction_checks_and_paper_tables(sources, reports):
+    rec = json.loads(sources["reproduction"].read_text())
+    rep = reports["reproduction"]
+    assert len(rep.checks) == len(rec["checks"]) and rep.map is None
+    page = render_html(rep)
+    assert page.count('<tr class="check ') == len(rec["checks"])
+    assert "Table III: paper beside ours" in page and "RMSE paper (m)" in page
+
+
+def test_drift_legs_obstacles_and_current(sources, reports):
+    names = _names(map_figure(reports["drift"].map))
+    assert {"flight legs", "drift legs", "goal tolerance", "current"} <= set(names)
+    assert names.count("obstacle") == 2
+
+
+def test_montecarlo_has_no_map_and_the_nees_check(sources, reports):
+    rep = reports["montecarlo"]
+    assert rep.map is None and rep.checks[0].name.startswith("mean NEES at epoch 12")
+
+
+def test_track_is_thinned_for_drawing_only():
+    n = 3 * MAX_TRACK_POINTS + 7
+    track = np.column_stack([np.arange(n, dtype=float), np.zeros(n)])
+    layers = MapLayers(track_en_m=track)
+    drawn = map_figure(layers).data[0]
+    assert len(drawn.x) <= MAX_TRACK_POINTS and drawn.x[0] == 0.0 and drawn.x[-1] == n - 1
+    assert f"of {n} points drawn" in drawn.name and layers.track_en_m.shape[0] == n
+
+
+def test_user_text_is_escaped():
+    rep = Report(
+        kind="survey",
+        title="<b>x</b>",
+        summary=("<script>alert(1)</script>",),
+        map=MapLayers(
+            estimates=(
+                Estimate(label="<i>", east_m=0, north_m=0, semi_major_m=1, semi_minor_m=1, angle_rad=0),
+            )
+        ),
+    )
+    page = render_html(rep)
+    assert "<script>alert(1)</script>" not in page and "&lt;script&gt;alert(1)" in page
+
+
+def test_unknown_json_and_foreign_files_are_data_errors(tmp_path):
+    (tmp_path / "a.json").write_text('{"x": 1}')
+    with pytest.raises(DataError, match="not a record oceanloc report knows"):
+        detect_kind(tmp_path / "a.json")
+    (tmp_path / "b.bin").write_bytes(b"\x00\xff" * 10)
+    with pytest.raises(DataError, match="neither a survey journal"):
+        detect_kind(tmp_path / "b.bin")
+    with pytest.raises(DataError, match="no such file"):
+        detect_kind(tmp_path / "missing.db")
+
+
+def test_journal_sigma_by_time_ends_at_the_final_ellipse(sources, reports):
+    rep = reports["journal"]
+    sigma = rep.series[0]
+    assert sigma.title.startswith("95 % ellipse semi-major axis by time")
+    finals = {e.label: e.semi_major_m for e in rep.map.estimates}
+    for name, _, y, _, _ in sigma.lines:
+        assert y[-1] == pytest.approx(finals[name], rel=1e-9)  # the last cut is the whole journal
+        assert y[-1] < y[0]  # more ranges, smaller ellipse
