@@ -17,7 +17,8 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 install: $(STAMP)
 
-# System components that some tests run for real (gpsd, socat): installed where possible, else skipped.
+# System components that some tests run for real (gpsd, socat, chromium): installed where possible, else
+# those tests skip with a message naming the component.
 system:
 	@bash scripts/system-deps.sh
 
