@@ -27,7 +27,8 @@ from oceanloc.errors import ConfigError
 from oceanloc.io import records
 
 console = Console()
-err_console = Console(stderr=True)
+err_console = Console(stderr=True, soft_wrap=True)
+"""Messages on stderr are never wrapped: a QC line or an error stays one line, whatever the width."""
 
 Workers = Annotated[
     int | None,
