@@ -25,8 +25,9 @@ system:
 demo: $(STAMP)
 	$(BIN)/oceanloc demo --out oceanloc-demo
 
+# Tests run in as many processes as there are cores (pytest-xdist), a test file per process at a time.
 test: $(STAMP) system
-	$(BIN)/python -m pytest -m "not slow"
+	$(BIN)/python -m pytest -m "not slow" -n auto --dist loadfile
 
 test-slow: $(STAMP) system
 	$(BIN)/python -m pytest -m slow
