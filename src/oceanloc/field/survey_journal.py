@@ -18,6 +18,7 @@ in one go or by a process that was killed and re-run.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -215,6 +216,9 @@ class Waypoint:
     status : PlanStatus
     origin : EnuOrigin or None
         The ENU frame of the positions above (the estimates').
+    untrusted_beacons : (U,) int
+        Planned-for beacons whose ellipse is not trusted yet (:attr:`SurveyEstimates.trusted`): the plan
+        uses their linearized covariances, which overstate what is known there.
     """
 
     planner: str
@@ -234,6 +238,7 @@ class Waypoint:
     beacons: IntArray
     status: PlanStatus
     origin: EnuOrigin | None = None
+    untrusted_beacons: IntArray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def from_heading_deg(self) -> float | None:
@@ -274,6 +279,7 @@ class Waypoint:
             "objective_nats": self.objective_nats,
             "beacons": self.beacons.tolist(),
             "status": self.status.value,
+            "untrusted_beacons": self.untrusted_beacons.tolist(),
             "origin": None
             if self.origin is None
             else {"lat_deg": self.origin.lat_deg, "lon_deg": self.origin.lon_deg, "h_m": self.origin.h_m},
@@ -481,6 +487,7 @@ def next_waypoint(
         beacons=est.beacons.copy(),
         status=plan.status,
         origin=est.origin,
+        untrusted_beacons=est.beacons[~est.trusted],
     )
 
 

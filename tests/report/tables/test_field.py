@@ -94,3 +94,33 @@ def test_journal_estimates_table_shows_the_trust_column(tmp_path):
     lines = tables.journal_range_lines(untrusted)
     assert any(line.startswith("beacon 2: bent (linearity ") for line in lines)
     assert not any("bent" in line or "ok" in line for line in tables.journal_range_lines(est))
+
+
+def test_waypoint_line_names_beacons_whose_ellipse_is_not_trusted():
+    from oceanloc.field.survey_journal import Waypoint
+    from oceanloc.planning.status import PlanStatus
+
+    w = Waypoint(
+        planner="k1",
+        from_t_unix_s=0.0,
+        from_enu_m=np.zeros(3),
+        yaw_rad=0.0,
+        heading_source="HDT",
+        next_enu_m=np.ones(3),
+        next_geodetic=np.array([32.7, -117.2, 0.0]),
+        next_heading_deg=10.0,
+        distance_m=1.4,
+        bearing_deg=45.0,
+        waypoints_enu_m=np.ones((1, 3)),
+        waypoints_geodetic=np.array([[32.7, -117.2, 0.0]]),
+        yaw_rates_rad_s=None,
+        objective_nats=1.0,
+        beacons=np.array([1, 2]),
+        status=PlanStatus.EXACT,
+    )
+    assert "not trusted" not in tables.waypoint_line(w)
+    flagged = dataclasses.replace(w, untrusted_beacons=np.array([2]))
+    assert tables.waypoint_line(flagged).endswith(
+        "(ellipse of beacon 2 not trusted yet: planned on its linearized covariance)"
+    )
+    assert flagged.to_record()["untrusted_beacons"] == [2]

@@ -334,4 +334,10 @@ def waypoint_line(w: Waypoint) -> str:
         f"go {w.distance_m:.2f} m on bearing {w.bearing_deg:.1f} deg (clockwise from true north) to "
         f"{w.next_geodetic[0]:.7f}, {w.next_geodetic[1]:.7f}; expected information gain "
         f"{w.objective_nats:.4f} nats over beacons {', '.join(map(str, w.beacons))}"
+        + (
+            f" (ellipse of beacon {', '.join(map(str, w.untrusted_beacons))} not trusted yet: planned on"
+            " its linearized covariance)"
+            if w.untrusted_beacons.size
+            else ""
+        )
     )
