@@ -4,6 +4,9 @@ Prints each measured figure beside its target and beside the paper's MATLAB figu
 
 * the look-ahead (k = 1, 2, 3) and greedy planners against exhaustive fine-grid search on 200 random
   planning problems each: the planner's objective must be within 1e-6 (relative) of the grid's, or above;
+* the same for the look-ahead on wide decision ranges (``w_max T`` of 90 and 180 degrees and the
+  scenario maximum, 3600 deg/s over 1 s), 250 problems for k = 1, 2 and 60 for k = 3, the reference grid
+  over one period of heading change where the range holds one (the objective is ``2 pi / T`` periodic);
 * median single-problem planning time (one run, one epoch) for M = 1 and M = 4, k = 1, 2, 3; target for
   M = 4, k = 3: at most 5 ms; the paper's MATLAB times per planning epoch beside ours;
 * the whole 1000-run reproduction of Tables III and V (k = 0..3, both M) on all cores: at most 10 minutes.
@@ -26,12 +29,16 @@ from oceanloc.units import DEG
 PROBLEMS = 200
 GRID_POINTS = {1: 20001, 2: 1001, 3: 101}
 GREEDY_GRID = 1001
+WIDE_HEADINGS_DEG = (90.0, 180.0, 3600.0)
+"""``w_max T`` of the wide-range benchmark (T = 1 s); 3600 deg/s is the scenario files' maximum."""
+WIDE_PROBLEMS = {1: 250, 2: 250, 3: 60}
+WIDE_GRID_POINTS = {1: 20001, 2: 601, 3: 81}
 PAPER_TIMES_S = garcia2019.PAPER_PLAN_TIME_S
 
 
-def _lookahead(k: int) -> LookaheadPlanner:
+def _lookahead(k: int, heading_deg: float = 30.0) -> LookaheadPlanner:
     return LookaheadPlanner(
-        horizon=k, max_yaw_rate_rad_s=30 * DEG, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
+        horizon=k, max_yaw_rate_rad_s=heading_deg * DEG, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
     )
 
 
@@ -80,6 +87,29 @@ def optimality() -> None:
             periodic=[False, True],
         )
         _report_gap(f"M={m} greedy d_max=5 m", plan.objective, grid.value, time.perf_counter() - start)
+
+
+def wide_optimality() -> None:
+    print("Global optimality of the look-ahead on wide yaw ranges (T = 1 s), against exhaustive grid search:")
+    for heading in WIDE_HEADINGS_DEG:
+        for m in (1, 4):
+            for k in (1, 2, 3):
+                n = WIDE_PROBLEMS[k]
+                state = random_planning_states(np.random.default_rng(5000 + int(heading) + 10 * m + k), n, m)
+                planner = _lookahead(k, heading)
+                plan = planner.plan(state)
+                start = time.perf_counter()
+                w = min(heading * DEG, np.pi)
+                grid = grid_maximum(
+                    lambda x, rows, p=planner, s=state: p.gain(s, x),
+                    [-w] * k,
+                    [w] * k,
+                    n,
+                    WIDE_GRID_POINTS[k],
+                    periodic=[heading >= 180.0] * k,
+                )
+                name = f"wT={heading:.0f} M={m} k={k}"
+                _report_gap(name, plan.objective, grid.value, time.perf_counter() - start)
 
 
 def latency() -> None:
@@ -141,6 +171,7 @@ def reproduction() -> None:
 def main() -> None:
     latency()
     optimality()
+    wide_optimality()
     reproduction()
 
 

@@ -165,3 +165,26 @@ def test_csv_export_tables(survey, tmp_path: Path):
     table = np.genfromtxt(paths[3], delimiter=",", names=True)
     np.testing.assert_array_equal(table["e_m"], est.positions_enu_m[:, 0])
     np.testing.assert_array_equal(table["ellipse95_semi_major_m"], est.ellipses.semi_major_m)
+
+
+def test_estimates_say_whether_each_ellipse_can_be_trusted(survey):
+    # 10 min of pier logs: hundreds of ranges per beacon from a wide track, so the range model is linear
+    # over each 95 % ellipsoid (statistic below log 2); four ranges from one short leg are not.
+    from oceanloc.estimation.consistency import range_linearization_check
+
+    _, records = survey
+    est = survey_estimates(records, SETTINGS)
+    assert est.trusted.tolist() == [True, True]
+    assert np.all(est.linearity < np.log(2.0))
+    rec = est.to_record()["beacons"][0]
+    assert rec["ellipse_trusted"] is True and rec["linearity"] == pytest.approx(float(est.linearity[0]))
+    assert rec["trust_message"] == "ellipse trusted: the range model is linear over it"
+    # the same check straight from its function on two close sites: not trusted
+    p = np.array([[10.0, 0.0, -8.0]])
+    sensors = np.array([[[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0], [1.5, 0.0, 0.0]]])
+    ranges = np.linalg.norm(sensors - p[:, None], axis=-1)
+    h = (p[:, None] - sensors)[0] / ranges[0][:, None]
+    prior = np.diag([100.0, 100.0, 10.0]) ** 2
+    cov = np.linalg.inv(h.T @ h / 1.0 + np.linalg.inv(prior))
+    check = range_linearization_check(p, cov[None], sensors, ranges, np.ones((1, 4), bool), 1.0, p, prior)
+    assert not check.trusted[0]

@@ -154,3 +154,46 @@ def test_tensor_grid_evaluation_equals_the_direct_objective(k, m):
     # eps cond(G) (Gram entries reach 1e4 for well localized transponders), so 1e-11, not the last bit
     np.testing.assert_allclose(objective.tensor_grid(axes, rows), direct, rtol=1e-11)
     assert objective.tensor_grid([axes[0]] * 4, rows) is None  # k > 3: the direct evaluation
+
+
+@pytest.mark.parametrize(
+    ("heading_deg", "points"), [(30.0, 9), (60.0, 17), (90.0, 25), (179.0, 48), (180.0, 30), (12960000.0, 30)]
+)
+def test_lookahead_grid_grows_with_the_decision_range(heading_deg, points):
+    # Spacing in heading change at most 12 degrees: n = ceil(pi w_max T / 12 deg) + 1 on the sine grid,
+    # ceil(360 / 12) on one period once w_max T >= 180 degrees (the search box then wraps).
+    from oceanloc.planning.measurement_sites import lookahead_grid_points
+
+    assert lookahead_grid_points(heading_deg * DEG, 9) == points
+    planner = LookaheadPlanner(
+        horizon=2, max_yaw_rate_rad_s=heading_deg * DEG, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
+    )
+    assert planner.search_options().grid_points == points
+    _, upper, periodic = planner.search_box()
+    assert periodic == (heading_deg >= 180.0)
+    np.testing.assert_allclose(upper, min(heading_deg * DEG, np.pi))
+
+
+@pytest.mark.parametrize(("heading_deg", "m"), [(90.0, 1), (180.0, 1), (180.0, 4), (3600.0, 1)])
+def test_lookahead_wide_yaw_ranges_reach_the_exhaustive_grid_optimum(heading_deg, m):
+    # Wide decision ranges (w_max T up to the scenario maximum of 3600 deg/s over 1 s): k = 2 against
+    # an exhaustive 361 x 361 grid over one period of heading change (the objective is 2 pi / T periodic
+    # in each yaw rate, eq. 1). The fixed 9-point grid missed by up to 1.4e-3 (relative) at 180 degrees
+    # and 1.9e-4 at 3600 degrees on 250 such problems (benchmarks/bench_survey.py, wide ranges).
+    rng = np.random.default_rng(int(heading_deg) + m)
+    state = random_planning_states(rng, 20, m)
+    planner = LookaheadPlanner(
+        horizon=2, max_yaw_rate_rad_s=heading_deg * DEG, speed_mps=3.0, period_s=1.0, sigma_range_m=0.12
+    )
+    plan = planner.plan(state)
+    w = min(heading_deg * DEG, np.pi)
+    grid = grid_maximum(
+        lambda x, rows: planner.gain(state, x),
+        [-w] * 2,
+        [w] * 2,
+        20,
+        361,
+        periodic=[heading_deg >= 180.0] * 2,
+    )
+    assert np.all(plan.objective >= grid.value - 1e-6 * np.abs(grid.value))
+    assert np.all(np.abs(plan.yaw_rates_rad_s) <= heading_deg * DEG + 1e-12)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from oceanloc._typing import ArrayLike, FloatArray
+from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError
 
 
@@ -164,3 +164,120 @@ def _stats():
     from scipy import stats
 
     return stats
+
+
+LINEARIZATION_BAND = (0.5, 2.0)
+"""Band of the cost-increase ratio inside which a linearized covariance is trusted."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class LinearizationCheck:
+    """Result of :func:`range_linearization_check` for ``B`` estimates.
+
+    Attributes
+    ----------
+    ratio : (B, 2 d) float
+        Cost increase over its quadratic prediction at the ``2 d`` sigma points on the ellipsoid.
+    statistic : (B,) float
+        ``max |log ratio|`` (0 for a linear model); trusted when it is at most ``log 2``.
+    trusted : (B,) bool
+        Every ratio within :data:`LINEARIZATION_BAND`.
+    confidence : float
+        Probability mass of the ellipsoid the sigma points lie on.
+    """
+
+    ratio: FloatArray
+    statistic: FloatArray
+    trusted: BoolArray
+    confidence: float
+
+    def messages(self) -> list[str]:
+        """One line per estimate: trusted, or how far the range model bends over the ellipsoid."""
+        worst = np.exp(self.statistic)
+        return [
+            "ellipse trusted: the range model is linear over it"
+            if ok
+            else f"ellipse not trusted: over the {self.confidence:.0%} ellipsoid the cost rises"
+            f" {w:.1f}x {'more' if r > 1 else 'less'} than the linearization predicts; collect more ranges"
+            for ok, w, r in zip(
+                self.trusted, worst, np.take_along_axis(self.ratio, _worst(self.ratio), 1)[:, 0], strict=True
+            )
+        ]
+
+
+def _worst(ratio: FloatArray) -> IntArray:
+    return np.argmax(np.abs(np.log(np.maximum(ratio, 1e-300))), axis=1)[:, None]
+
+
+def range_linearization_check(
+    estimate_m: ArrayLike,
+    covariance_m2: ArrayLike,
+    sensor_m: ArrayLike,
+    ranges_m: ArrayLike,
+    used: ArrayLike,
+    sigma_range_m: float,
+    prior_mean_m: ArrayLike,
+    prior_cov_m2: ArrayLike,
+    *,
+    confidence: float = 0.95,
+    band: tuple[float, float] = LINEARIZATION_BAND,
+) -> LinearizationCheck:
+    """Whether the linearized covariance of range estimates can be trusted: a check of the range model's
+    linearization over the confidence ellipsoid.
+
+    The MAP cost of ranges ``z_i`` from sensor positions ``s_i`` with prior ``N(p0, P0)`` is
+    ``J(p) = 1/2 sum_i (z_i - |p - s_i|)^2 / sigma^2 + 1/2 (p - p0)^T P0^-1 (p - p0)``. The reported
+    covariance ``P`` is the inverse of its Gauss-Newton Hessian ``Y = H^T H / sigma^2 + P0^-1`` at the
+    estimate, i.e. it assumes ``J`` quadratic over the region the covariance describes. The check
+    evaluates ``J`` at the ``2 d`` sigma points ``p +- c sqrt(lambda_j) v_j`` on the ``confidence``
+    ellipsoid of ``P`` (``c^2`` the chi-square ``d``-dof quantile, 7.81 for 95 % in 3-D; ``lambda_j, v_j``
+    the eigenpairs of ``P``) and compares the cost increase ``J(p + Delta) - J(p)`` with the quadratic
+    prediction ``1/2 Delta^T Y Delta``. For a linear model the ratio is 1; where the ranges' geometry is
+    still poor (few sites, nearly collinear, a mirror ambiguity) the true cost along the long axes is
+    much flatter (ratio << 1: the estimate could be anywhere along a curved valley, a second minimum)
+    or steeper than predicted, and the ellipse misstates the error. Trusted when every ratio lies in
+    ``band`` (default ``[0.5, 2]``: the ellipse's size is right within a factor of ``sqrt 2``).
+
+    Batched over ``B`` estimates with ``n`` ranges each (pad with ``used = False``).
+
+    Parameters
+    ----------
+    estimate_m : (B, 3) float
+    covariance_m2 : (B, 3, 3) float
+        The reported covariances, square metres.
+    sensor_m : (B, n, 3) float
+    ranges_m, used : (B, n) float, bool
+    sigma_range_m : float
+        Range noise, metres.
+    prior_mean_m : (B, 3) float
+    prior_cov_m2 : (B, 3, 3) or (3, 3) float
+    """
+    if not 0.0 < confidence < 1.0:
+        raise ConfigError(f"confidence must be in (0, 1), got {confidence}")
+    if not 0.0 < band[0] < 1.0 < band[1]:
+        raise ConfigError(f"band must hold 1 inside (0, inf), got {band}")
+    p = np.asarray(estimate_m, dtype=float)
+    cov = np.asarray(covariance_m2, dtype=float)
+    sensors = np.asarray(sensor_m, dtype=float)
+    z = np.asarray(ranges_m, dtype=float)
+    w = np.asarray(used, dtype=bool) / sigma_range_m
+    p0 = np.asarray(prior_mean_m, dtype=float)
+    prior_info = np.linalg.inv(np.broadcast_to(np.asarray(prior_cov_m2, dtype=float), cov.shape))
+    d = p.shape[-1]
+    lam, vec = np.linalg.eigh(0.5 * (cov + np.swapaxes(cov, -1, -2)))
+    c = float(np.sqrt(_stats().chi2.ppf(confidence, d)))
+    axes = c * np.sqrt(np.maximum(lam, 0.0))[:, None, :] * vec  # (B, d, d): column j = c sqrt(l_j) v_j
+    delta = np.concatenate([np.swapaxes(axes, 1, 2), -np.swapaxes(axes, 1, 2)], axis=1)  # (B, 2d, d)
+    pts = np.concatenate([p[:, None, :], p[:, None, :] + delta], axis=1)  # (B, 1 + 2d, d)
+    dist = np.linalg.norm(pts[:, :, None, :] - sensors[:, None, :, :], axis=-1)  # (B, 1 + 2d, n)
+    resid = (z[:, None, :] - dist) * w[:, None, :]
+    dev = pts - p0[:, None, :]
+    cost = 0.5 * np.sum(resid**2, axis=-1) + 0.5 * np.einsum("bci,bij,bcj->bc", dev, prior_info, dev)
+    los = (p[:, None, :] - sensors) / np.maximum(dist[:, :1, :].transpose(0, 2, 1), 1e-12)
+    jac = los * w[..., None]
+    info = np.einsum("bni,bnj->bij", jac, jac) + prior_info
+    predicted = 0.5 * np.einsum("bci,bij,bcj->bc", delta, info, delta)
+    ratio = (cost[:, 1:] - cost[:, :1]) / np.maximum(predicted, 1e-300)
+    statistic = np.max(np.abs(np.log(np.maximum(ratio, 1e-300))), axis=1)
+    trusted = np.all((ratio >= band[0]) & (ratio <= band[1]), axis=1)
+    return LinearizationCheck(ratio=ratio, statistic=statistic, trusted=trusted, confidence=confidence)

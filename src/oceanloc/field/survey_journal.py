@@ -18,16 +18,22 @@ in one go or by a process that was killed and re-run.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from oceanloc._typing import FloatArray, IntArray
+from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.estimation.consistency import ConfidenceEllipse, confidence_ellipse
+from oceanloc.estimation.consistency import (
+    ConfidenceEllipse,
+    LinearizationCheck,
+    confidence_ellipse,
+    range_linearization_check,
+)
 from oceanloc.estimation.range_logs import localize_beacons
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.journal import AppendCounts, Journal, JournalRecords, append_gps_log, append_range_log
@@ -80,6 +86,13 @@ class SurveyEstimates:
         Every fix in ENU, metres.
     range_status : (m,) int
         Index into :data:`RANGE_STATUS` of each journal range (journal order).
+    trusted : (M,) bool
+        Whether each ellipse can be trusted: the range model is close to linear over its 95 % ellipsoid
+        (:func:`~oceanloc.estimation.consistency.range_linearization_check`).
+    linearity : (M,) float
+        That check's statistic, ``max |log(cost increase / quadratic prediction)|`` (trusted up to log 2).
+    trust_messages : tuple of str
+        One line per beacon saying why its ellipse is or is not trusted.
     """
 
     origin: EnuOrigin
@@ -95,6 +108,9 @@ class SurveyEstimates:
     waiting_ranges: IntArray
     track_enu_m: FloatArray
     range_status: IntArray
+    trusted: BoolArray
+    linearity: FloatArray
+    trust_messages: tuple[str, ...]
 
     @property
     def sigma_enu_m(self) -> FloatArray:
@@ -135,6 +151,9 @@ class SurveyEstimates:
                     "ranges_used": int(self.ranges_used[i]),
                     "ranges_excluded": int(self.ranges_excluded[i]),
                     "residual_rms_m": float(self.residual_rms_m[i]),
+                    "ellipse_trusted": bool(self.trusted[i]),
+                    "linearity": float(self.linearity[i]),
+                    "trust_message": self.trust_messages[i],
                 }
             )
         o = self.origin
@@ -197,6 +216,9 @@ class Waypoint:
     status : PlanStatus
     origin : EnuOrigin or None
         The ENU frame of the positions above (the estimates').
+    untrusted_beacons : (U,) int
+        Planned-for beacons whose ellipse is not trusted yet (:attr:`SurveyEstimates.trusted`): the plan
+        uses their linearized covariances, which overstate what is known there.
     """
 
     planner: str
@@ -216,6 +238,7 @@ class Waypoint:
     beacons: IntArray
     status: PlanStatus
     origin: EnuOrigin | None = None
+    untrusted_beacons: IntArray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def from_heading_deg(self) -> float | None:
@@ -256,6 +279,7 @@ class Waypoint:
             "objective_nats": self.objective_nats,
             "beacons": self.beacons.tolist(),
             "status": self.status.value,
+            "untrusted_beacons": self.untrusted_beacons.tolist(),
             "origin": None
             if self.origin is None
             else {"lat_deg": self.origin.lat_deg, "lon_deg": self.origin.lon_deg, "h_m": self.origin.h_m},
@@ -313,6 +337,7 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     pos = np.array([e.position_enu_m for e in found]).reshape(-1, 3)
     cov = np.array([e.covariance_m2 for e in found]).reshape(-1, 3, 3)
     wait_ids = np.array(sorted(waiting), dtype=np.int64)
+    check = _linearization(subset, found, pos, cov, settings)
     return SurveyEstimates(
         origin=origin,
         beacons=np.array([e.beacon for e in found], dtype=np.int64),
@@ -327,6 +352,39 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
         waiting_ranges=np.array([waiting[int(b)] for b in wait_ids], dtype=np.int64),
         track_enu_m=geodetic_to_enu(records.lat_deg, records.lon_deg, records.h_m, origin).reshape(-1, 3),
         range_status=status,
+        trusted=check.trusted,
+        linearity=check.statistic,
+        trust_messages=tuple(check.messages()),
+    )
+
+
+def _linearization(
+    subset: AlignedRanges, found: Sequence, pos: FloatArray, cov: FloatArray, settings: JournalSettings
+) -> LinearizationCheck:
+    """The linearization check of every estimate, on its used ranges and the prior
+    :func:`~oceanloc.estimation.range_logs.localize_beacons` put on it (below the shortest range,
+    ``prior_depth_m`` under the antenna's median height)."""
+    n = max((e.used.size for e in found), default=1)
+    sensors = np.zeros((len(found), n, 3))
+    ranges = np.zeros((len(found), n))
+    used = np.zeros((len(found), n), dtype=bool)
+    mean = np.zeros((len(found), 3))
+    surface = float(np.median(subset.vehicle_enu_m[:, 2])) if subset.range_m.size else 0.0
+    for i, e in enumerate(found):
+        sel = subset.select(e.beacon)
+        m = e.used.size
+        sensors[i, :m], ranges[i, :m], used[i, :m] = subset.vehicle_enu_m[sel], subset.range_m[sel], e.used
+        i0 = int(np.argmin(subset.range_m[sel]))
+        mean[i] = [sensors[i, i0, 0], sensors[i, i0, 1], surface - settings.prior_depth_m]
+    return range_linearization_check(
+        pos,
+        cov,
+        sensors,
+        ranges,
+        used,
+        settings.sigma_range_m,
+        mean,
+        np.diag(np.square(settings.prior_sigma_enu_m)),
     )
 
 
@@ -429,6 +487,7 @@ def next_waypoint(
         beacons=est.beacons.copy(),
         status=plan.status,
         origin=est.origin,
+        untrusted_beacons=est.beacons[~est.trusted],
     )
 
 

@@ -43,7 +43,7 @@ Objective = Callable[[FloatArray, IntArray], FloatArray]
 """``f(x: (b, C, d), rows: (b,)) -> (b, C)``: values of ``C`` candidates of each problem ``rows[i]``.
 
 An objective may also offer ``tensor_grid(axes: list of (n_j,), rows) -> (b, prod n_j)`` (C order; or
-None), a faster evaluation of a whole tensor grid; the grid stage uses it on boxes without periodic axes.
+None), a faster evaluation of a whole tensor grid (in ``x``); the grid stage uses it where offered.
 """
 
 
@@ -249,19 +249,24 @@ class _GridStarts:
 def _grid_starts(
     fn: Objective, fn_u: Objective, space: _SearchSpace, batch: int, opts: BoxSearchOptions
 ) -> _GridStarts:
-    """Stage 1: the objective on the ``u`` grid (a tensor-grid evaluation where ``fn`` offers one and no
-    axis is periodic) and the best ``opts.starts`` grid local maxima of every problem."""
+    """Stage 1: the objective on the ``u`` grid (a tensor-grid evaluation where ``fn`` offers one) and the
+    best ``opts.starts`` grid local maxima of every problem."""
     n, d, per = opts.grid_points, space.dims, space.periodic
     axes, mesh, base = _u_grid(n, tuple(space.u_lo.tolist()), tuple(space.u_hi.tolist()), tuple(per.tolist()))
     all_rows = np.arange(batch)
     tensor_grid = getattr(fn, "tensor_grid", None)
-    values = None
-    if tensor_grid is not None and not np.any(per):
-        values = tensor_grid(
-            [space.mid[j] + space.half[j] * np.sin(ax) for j, ax in enumerate(axes)], all_rows
-        )
-    if values is None:
-        values = fn_u(np.broadcast_to(mesh, (batch, *mesh.shape)), all_rows)
+    # on the grid a periodic axis is x itself (its nodes lie in [lo, hi)), a bounded one mid + half sin(u)
+    x_axes = [ax if per[j] else space.mid[j] + space.half[j] * np.sin(ax) for j, ax in enumerate(axes)]
+    # problems in blocks of at most _GRID_CANDIDATES grid points in all, to bound memory on fine grids
+    block = max(1, _GRID_CANDIDATES // mesh.shape[0])
+    parts = []
+    for first in range(0, batch, block):
+        rows = all_rows[first : first + block]
+        part = tensor_grid(x_axes, rows) if tensor_grid is not None else None
+        if part is None:
+            part = fn_u(np.broadcast_to(mesh, (rows.size, *mesh.shape)), rows)
+        parts.append(part)
+    values = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)
     starts = _grid_local_maxima(values.reshape(batch, *([n] * d)), per, opts.starts)
     return _GridStarts(
         u=mesh[starts.reshape(-1)],
@@ -468,6 +473,9 @@ def _last_candidates(
         f[pending[better]] = f_cand[better]
     return _Polished(u=u, f=f, evaluations=evaluations)
 
+
+_GRID_CANDIDATES = 1 << 17
+"""Most grid points (over all problems of a block) the grid stage evaluates in one objective call."""
 
 _MAX_SHRINK = 1.0 / 128.0
 """Smallest ratio of one stencil spacing to the previous one after a Newton step."""

@@ -69,3 +69,58 @@ def test_log_tables_fit_100_columns_with_units_and_the_origin(tmp_path):
     for header in ("segment s", "range m", "σ mm", "± mm"):
         assert header in text
     assert "use it as --sigma-range" in tables.range_noise_line(noise)
+
+
+def test_journal_estimates_table_shows_the_trust_column(tmp_path):
+    from oceanloc.config.survey_journal import JournalSettings
+    from oceanloc.field.survey_journal import survey_estimates
+    from oceanloc.io.journal import Journal, append_gps_log, append_range_log
+    from oceanloc.io.nmea import read_nmea
+    from oceanloc.io.usbl import read_usbl
+    from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
+
+    settings = JournalSettings(beacons=(1, 2))
+    logs = simulate_pier_logs(tmp_path, PierLogSettings(duration_s=600.0), np.random.default_rng(3))
+    with Journal.start(tmp_path / "s.db", settings.to_meta()) as j:
+        append_gps_log(j, read_nmea(logs.nmea_path), logs.nmea_path)
+        append_range_log(j, read_usbl(logs.ranges_path, beacons=(1, 2)), logs.ranges_path)
+        records = j.records()
+    est = survey_estimates(records, settings)
+    untrusted = dataclasses.replace(est, trusted=np.array([True, False]), trust_messages=("ok", "bent"))
+    text = _render(tables.journal_estimates_table(untrusted))
+    rows = [line for line in text.splitlines() if line.strip().startswith(("1 ", "2 "))]
+    assert "!" not in rows[0] and rows[1].count("!") == 1 and "not trusted" in text
+    assert all(len(line) <= 100 for line in text.splitlines())
+    lines = tables.journal_range_lines(untrusted)
+    assert any(line.startswith("beacon 2: bent (linearity ") for line in lines)
+    assert not any("bent" in line or "ok" in line for line in tables.journal_range_lines(est))
+
+
+def test_waypoint_line_names_beacons_whose_ellipse_is_not_trusted():
+    from oceanloc.field.survey_journal import Waypoint
+    from oceanloc.planning.status import PlanStatus
+
+    w = Waypoint(
+        planner="k1",
+        from_t_unix_s=0.0,
+        from_enu_m=np.zeros(3),
+        yaw_rad=0.0,
+        heading_source="HDT",
+        next_enu_m=np.ones(3),
+        next_geodetic=np.array([32.7, -117.2, 0.0]),
+        next_heading_deg=10.0,
+        distance_m=1.4,
+        bearing_deg=45.0,
+        waypoints_enu_m=np.ones((1, 3)),
+        waypoints_geodetic=np.array([[32.7, -117.2, 0.0]]),
+        yaw_rates_rad_s=None,
+        objective_nats=1.0,
+        beacons=np.array([1, 2]),
+        status=PlanStatus.EXACT,
+    )
+    assert "not trusted" not in tables.waypoint_line(w)
+    flagged = dataclasses.replace(w, untrusted_beacons=np.array([2]))
+    assert tables.waypoint_line(flagged).endswith(
+        "(ellipse of beacon 2 not trusted yet: planned on its linearized covariance)"
+    )
+    assert flagged.to_record()["untrusted_beacons"] == [2]

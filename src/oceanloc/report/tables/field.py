@@ -261,9 +261,13 @@ def journal_status_lines(st: JournalStatus) -> list[str]:
 
 def journal_estimates_table(est: SurveyEstimates, origin_source: str = "") -> Table:
     """``survey status``: per beacon the estimate (ENU and latitude/longitude), 1-sigma, 95 % ellipse
-    semi-axes and the major axis' azimuth (clockwise from north), ranges used and excluded."""
+    semi-axes and the major axis' azimuth (clockwise from north), ranges used and excluded, and whether
+    the ellipse can be trusted (``!`` after it where the range model's linearization check fails)."""
     table = _table(f"Beacons, ENU from {origin_text(est.origin, origin_source)}")
-    table.caption = "95% a/b: ellipse semi-axes; az: its major axis, clockwise from true north"
+    table.caption = (
+        "95% a/b: ellipse semi-axes (! not trusted: the range model bends over it, see below);"
+        " az: its major axis, clockwise from true north"
+    )
     cols = ("beacon", "E m", "N m", "U m", "lat deg", "lon deg", "1σ E/N/U m", "95% a/b m", "az deg")
     cols = (*cols, "used/excl")
     for col in cols:
@@ -275,7 +279,8 @@ def journal_estimates_table(est: SurveyEstimates, origin_source: str = "") -> Ta
             f"{est.positions_geodetic[i, 0]:.6f}",
             f"{est.positions_geodetic[i, 1]:.6f}",
             "/".join(f"{v:.2f}" for v in est.sigma_enu_m[i]),
-            f"{est.ellipses.semi_major_m[i]:.2f}/{est.ellipses.semi_minor_m[i]:.2f}",
+            f"{est.ellipses.semi_major_m[i]:.2f}/{est.ellipses.semi_minor_m[i]:.2f}"
+            + ("" if est.trusted[i] else "!"),
             f"{est.ellipse_azimuth_deg[i]:.0f}",
             f"{est.ranges_used[i]}/{est.ranges_excluded[i]}",
         )
@@ -289,6 +294,11 @@ def journal_range_lines(est: SurveyEstimates) -> list[str]:
     lines += [
         f"beacon {b}: {c} ranges with GPS, needs {MIN_RANGES}"
         for b, c in zip(est.waiting_beacons, est.waiting_ranges, strict=True)
+    ]
+    lines += [
+        f"beacon {b}: {msg} (linearity {stat:.2f}, trusted up to {np.log(2.0):.2f})"
+        for b, ok, msg, stat in zip(est.beacons, est.trusted, est.trust_messages, est.linearity, strict=True)
+        if not ok
     ]
     return lines
 
@@ -324,4 +334,10 @@ def waypoint_line(w: Waypoint) -> str:
         f"go {w.distance_m:.2f} m on bearing {w.bearing_deg:.1f} deg (clockwise from true north) to "
         f"{w.next_geodetic[0]:.7f}, {w.next_geodetic[1]:.7f}; expected information gain "
         f"{w.objective_nats:.4f} nats over beacons {', '.join(map(str, w.beacons))}"
+        + (
+            f" (ellipse of beacon {', '.join(map(str, w.untrusted_beacons))} not trusted yet: planned on"
+            " its linearized covariance)"
+            if w.untrusted_beacons.size
+            else ""
+        )
     )
