@@ -58,6 +58,11 @@ from oceanloc.planning.site_planners import (
 )
 from oceanloc.units import DEG
 
+MAX_RUNS = 10_000_000
+"""Most Monte Carlo runs a scenario may ask for."""
+MAX_RESULT_BYTES = 4 * 2**30
+"""Most memory the results of one Monte Carlo may take, bytes (checked before it starts)."""
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class EstimatorSettings:
@@ -124,6 +129,25 @@ class SurveyScenario:
     def n_transponders(self) -> int:
         return int(self.transponders_enu_m.shape[0])
 
+    def bytes_per_run(self) -> int:
+        """Memory a Monte Carlo run of this scenario needs, bytes (an upper estimate): per epoch the
+        sites, RMSEE, log det and, per transponder, the estimate, its 3x3 covariance and NEES (float64)."""
+        return 8 * (self.epochs + 1) * (5 + self.n_transponders * (3 + 9 + 1))
+
+    def check_runs(self, runs: int, *, max_bytes: int = MAX_RESULT_BYTES) -> None:
+        """Raise ConfigError if ``runs`` exceeds :data:`MAX_RUNS` or would need more than ``max_bytes``.
+
+        Checked before anything is allocated; the message says how much memory and what to change.
+        """
+        need = runs * self.bytes_per_run()
+        if runs > MAX_RUNS or need > max_bytes:
+            fit = max(1, min(MAX_RUNS, max_bytes // self.bytes_per_run()))
+            raise ConfigError(
+                f"--runs {runs}: {runs} runs of {self.name!r} ({self.epochs} epochs, {self.n_transponders} "
+                f"transponders) need about {need / 2**30:.3g} GiB of results (limit {max_bytes / 2**30:.3g} "
+                f"GiB, at most {MAX_RUNS} runs); use --runs {fit} or fewer, or fewer --epochs"
+            )
+
     def with_planner(self, planner: PlannerSettings) -> SurveyScenario:
         """The same scenario with another planner."""
         return dataclasses.replace(self, planner=planner)
@@ -162,8 +186,6 @@ MAX_DEPTH_M = 11_000.0
 """Deepest transponder, metres below the surface (the deepest ocean)."""
 MAX_TRANSPONDERS = 64
 """Most transponders in one survey scenario."""
-MAX_RUNS = 10_000_000
-"""Most Monte Carlo runs a scenario may ask for (the command line caps by memory too)."""
 
 
 def builtin_survey_scenarios() -> list[str]:
