@@ -221,7 +221,7 @@ def test_user_errors_are_one_line_messages_and_lose_nothing(tmp_path: Path, caps
     cases = [
         (["survey", "status", str(tmp_path / "none.db")], "none.db: no survey journal here"),
         (
-            ["survey", "add", str(tmp_path / "raw.db"), "--fix", "0,0,0,0"],
+            ["survey", "add", str(tmp_path / "raw.db"), "--fix", "1.6e9,0,0,0"],
             "raw.db: survey journal was never started",
         ),
         (["survey", "next", str(text)], "notes.txt: not a survey journal"),
@@ -262,7 +262,7 @@ def test_user_errors_are_one_line_messages_and_lose_nothing(tmp_path: Path, caps
             ["survey", "add", journal, "--range", "1.5e9,7,5.0"],
             "beacon 7 is not one of the survey's beacons 1, 2",
         ),
-        (["survey", "add", journal, "--range", "1.5e9,1,-5.0"], "R -5.0 m is not in (0, 10000]"),
+        (["survey", "add", journal, "--range", "1.5e9,1,-5.0"], "range -5 m is not in (0, 10000] m"),
         (
             ["survey", "add", journal, "--ranges", str(bad_csv)],
             "bad.csv:1: expected a header 'utc,beacon,range_m'",

@@ -54,7 +54,7 @@ def test_minimal_file_gets_defaults(tmp_path):
         (
             "sigma_range_m = 0.1",
             "sigma_range_m = -0.1",
-            r"\[sensor\] field 'sigma_range_m': must be > 0",
+            r"\[sensor\] field 'sigma_range_m': must be >= 1e-06",
         ),
         ("epochs = 10", "epochs = 'ten'", r"field 'epochs': must be an integer"),
         (
@@ -71,8 +71,38 @@ def test_minimal_file_gets_defaults(tmp_path):
         (
             "sigma_enu_m = [10.0, 10.0, 1.0]",
             "sigma_enu_m = [10.0, 0.0, 1.0]",
-            "must hold positive numbers",
+            r"\[prior\] field 'sigma_enu_m': must hold numbers in \[0.001, 100000\]",
         ),
+        ("sigma_enu_m = [10.0, 10.0, 1.0]", "sigma_enu_m = [1e160, 10.0, 1.0]", r"in \[0.001, 100000\]"),
+        ("sigma_enu_m = [10.0, 10.0, 1.0]", "sigma_enu_m = [5e-324, 10.0, 1.0]", r"in \[0.001, 100000\]"),
+        (
+            "start_yaw_deg = 45.0",
+            "start_yaw_deg = 45.0\nspeed_mps = 1e-300",
+            r"'speed_mps': must be >= 0.001",
+        ),
+        ("start_yaw_deg = 45.0", "start_yaw_deg = 45.0\nspeed_mps = 1e30", r"'speed_mps': must be <= 100"),
+        ("start_yaw_deg = 45.0", "start_yaw_deg = 45.0\nperiod_s = 1e-9", r"'period_s': must be >= 0.001"),
+        ("start_yaw_deg = 45.0", "start_yaw_deg = 45.0\nperiod_s = 1e9", r"'period_s': must be <= 3600"),
+        ("sigma_range_m = 0.1", "sigma_range_m = 1e300", r"'sigma_range_m': must be <= 1000"),
+        ("epochs = 10", "epochs = 1000000000", r"\[scenario\] field 'epochs': must be <= 100000"),
+        ("epochs = 10", "epochs = 0", r"field 'epochs': must be >= 1"),
+        ("enu_m = [1.0, 2.0, -3.0]", "enu_m = [1.0, 2.0, -30000.0]", r"z in \[-11000, 0\) m"),
+        (
+            "enu_m = [1.0, 2.0, -3.0]",
+            "enu_m = [1e300, 2.0, -3.0]",
+            r"'enu_m': must hold numbers in \[-100000",
+        ),
+        (
+            "start_enu_m = [0.0, 0.0, 0.0]",
+            "start_enu_m = [0.0, 1e300, 0.0]",
+            r"\[vehicle\] field 'start_enu_m'",
+        ),
+        (
+            "[[transponders]]\nenu_m = [1.0, 2.0, -3.0]",
+            "[[transponders]]\nenu_m = [1.0, 2.0, -3.0]\n" * 65,
+            r"field 'transponders': at most 64 transponders, got 65",
+        ),
+        ("epochs = 10", "epochs = 10\n[montecarlo]\nruns = 1000000000", r"'runs': must be <= 10000000"),
         ("[[transponders]]\nenu_m = [1.0, 2.0, -3.0]", "", "field 'transponders': is required"),
         ("epochs = 10", "epochs = 10\n[planner]\nkind = 'best'", "must be one of random-yaw"),
     ],

@@ -251,25 +251,29 @@ def _run_without_root_override(code: str, *args: str) -> subprocess.CompletedPro
     return subprocess.run(cmd, capture_output=True, text=True, env=os.environ)
 
 
-def test_a_journal_in_a_read_only_folder_is_reported_as_such(tmp_path: Path):
+def test_a_journal_in_a_read_only_folder_is_read_and_a_write_says_why(tmp_path: Path):
     folder = tmp_path / "ro"
     folder.mkdir()
-    Journal.start(folder / "j.db", {}).close()
+    with Journal.start(folder / "j.db", {}) as j:
+        j.add_fix(1.6e9, 10.0, 10.0, 0.0)
     folder.chmod(0o555)
     try:
         code = (
             "import sys\nfrom oceanloc.io.journal import Journal\n"
-            "try:\n    Journal.open(sys.argv[1])\nexcept Exception as e:\n    print(type(e).__name__, e)"
+            "j = Journal.open(sys.argv[1])\nprint(j.read_only, j.records().n_fixes)\n"
+            "try:\n    j.add_fix(1.7e9, 10.0, 10.0, 0.0)\n"
+            "except Exception as e:\n    print(type(e).__name__, e)"
         )
         res = _run_without_root_override(code, str(folder / "j.db"))
     finally:
         folder.chmod(0o755)
-    if "cannot use the journal" not in res.stdout and "Permission" in res.stderr:
+    if "True" not in res.stdout and "Permission" in res.stderr:
         pytest.skip(f"cannot drop write permission here: {res.stderr[-200:]}")
-    assert res.stdout.strip() == (
-        f"JournalError {folder / 'j.db'}: cannot use the journal: the folder {folder} is read-only (a "
-        "journal needs to create j.db-wal and j.db-shm beside it); copy the journal to a writable folder"
-    ), res.stdout + res.stderr
+    assert res.stdout.strip().splitlines() == [
+        "True 1",
+        f"JournalError {folder / 'j.db'}: the journal is read-only here: the folder {folder} is read-only (a "
+        "journal needs to create j.db-wal and j.db-shm beside it); copy the journal to a writable folder",
+    ], res.stdout + res.stderr
 
 
 def test_survey_add_with_an_out_of_range_fix_keeps_the_file_and_names_the_line(tmp_path: Path, capsys):

@@ -135,16 +135,26 @@ def logs(
         float, typer.Option(help="GPS error time constant, s (Gauss-Markov); 0: white, as in the journal.")
     ] = 60.0,
     max_gap: MaxGap = 2.0,
+    beacon: Annotated[
+        list[int] | None,
+        typer.Option(
+            "--beacon", help="An expected beacon id (repeat); ranges to others are QC'd. Default: any."
+        ),
+    ] = None,
     json_path: JsonOut = None,
 ) -> None:
-    """Locate the beacons of a GPS + USBL range log pair (ENU origin: --origin, else the earliest fix)."""
+    """Locate the beacons of a GPS + USBL range log pair (ENU origin: --origin, else the earliest fix).
+
+    A beacon with fewer than 4 ranges is listed as not localized; the others are solved."""
     loc = localize_log_files(
         gps, ranges, origin=None if origin is None else parse_origin(origin), truth=truth,
         sound_speed_mps=sound_speed, max_gap_s=max_gap, sigma_range_m=sigma_range, sigma_gps_m=sigma_gps,
-        gps_correlation_s=gps_correlation if gps_correlation > 0 else None,
+        gps_correlation_s=gps_correlation if gps_correlation > 0 else None, beacons=beacon or None,
     )  # fmt: skip
     _print_qc(loc.logs)
     console.print(tables.beacons_table(loc))
+    for line in loc.not_localized_lines():
+        err_console.print(escape(line), highlight=False)
     if json_path is not None:
         write_json(json_path, loc, cli_provenance(inputs=loc.inputs))
 

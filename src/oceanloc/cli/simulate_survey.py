@@ -56,6 +56,7 @@ def survey_command(
 
     scen = load_survey_scenario(scenario).with_overrides(planner=planner, horizon=horizon, epochs=epochs)
     n_runs = scen.runs if runs is None else runs
+    scen.check_runs(n_runs)
     seed = scen.seed if seed is None else seed
     if n_runs == 1:
         _single_run(scen, seed, json_path, figures)

@@ -1,4 +1,4 @@
-"""``oceanloc survey``: a field survey journal (start, add, next, status, export).
+"""``oceanloc survey``: a field survey journal (start, add, check, next, status, export).
 
 Every fix, heading and range goes into an SQLite journal, one transaction per record
 (:mod:`oceanloc.io.journal`); the estimates and the next waypoint are computed from the journal alone
@@ -19,7 +19,8 @@ from oceanloc.cli._options import parse_fields, parse_number, parse_origin, pars
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError
 from oceanloc.field.survey_journal import add_to_journal, journal_next_waypoint, journal_status
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey_journal_check import check_journal, journal_invalid_records
+from oceanloc.io.journal import Journal, fix_problem, range_problem
 from oceanloc.planning.site_planners import parse_site_planner
 from oceanloc.report.tables import field as tables
 from oceanloc.units import DEG
@@ -118,6 +119,8 @@ def add(
         fixes=[_parse_fix(text) for text in fix or []],
         manual_ranges=[_parse_range(text) for text in range_ or []],
     )
+    for record in journal_invalid_records(journal):
+        err_console.print(escape(f"{journal}: invalid stored record skipped: {record}"), highlight=False)
     for source, counts in res.sources:
         console.print(escape(f"{source}: {counts}"), highlight=False)
     for line in res.conflicts:
@@ -128,6 +131,31 @@ def add(
         escape(f"journal {journal}: {res.n_fixes} fixes, {res.n_headings} headings, {res.n_ranges} ranges"),
         highlight=False,
     )
+
+
+@app.command("check")
+def check(
+    journal: JournalArg,
+    remove_invalid: Annotated[
+        bool, typer.Option("--remove-invalid", help="Delete the invalid stored records (one transaction).")
+    ] = False,
+) -> None:
+    """Check every page and stored record; list invalid records (table, time, problem).
+
+    Exit status: 0 when the journal is clean (or was cleaned with --remove-invalid), 1 when problems
+    remain, 2 on a usage error or a file that is not a journal.
+    """
+    res = check_journal(journal, remove_invalid=remove_invalid)
+    for line in res.lines():
+        console.print(escape(f"{journal}: {line}"), highlight=False)
+    if res.removed:
+        console.print(escape(f"{journal}: removed {res.removed} invalid record(s)"), highlight=False)
+    if res.clean:
+        console.print(escape(f"{journal}: ok ({'clean now' if res.removed else 'no problems'})"))
+        return
+    hint = "" if res.damaged else "; `--remove-invalid` deletes them"
+    err_console.print(escape(f"{journal}: {len(res.lines())} problem(s){hint}"), highlight=False)
+    raise SystemExit(1)  # problems remain: exit status 1 (not a usage error)
 
 
 @app.command("next")
@@ -205,7 +233,10 @@ def _parse_fix(text: str) -> tuple[float, float, float, float]:
         raise ConfigError(f"{where}: expected T,LAT,LON,H (4 values), got {len(parts)}")
     lat = parse_number(parts[1], "LAT", where, -90.0, 90.0)
     lon = parse_number(parts[2], "LON", where, -180.0, 360.0)
-    return parse_time(parts[0], where), lat, lon, parse_number(parts[3], "H", where)
+    values = (parse_time(parts[0], where), lat, lon, parse_number(parts[3], "H", where))
+    if problem := fix_problem(*values):
+        raise ConfigError(f"{where}: {problem}; nothing was added")
+    return values
 
 
 def _parse_range(text: str) -> tuple[float, int, float]:
@@ -218,4 +249,7 @@ def _parse_range(text: str) -> tuple[float, int, float]:
         beacon = int(parts[1])
     except ValueError:
         raise ConfigError(f"{where}: BEACON {parts[1].strip()!r} is not an integer id") from None
-    return parse_time(parts[0], where), beacon, parse_number(parts[2], "R", where)
+    values = (parse_time(parts[0], where), beacon, parse_number(parts[2], "R", where))
+    if problem := range_problem(*values):
+        raise ConfigError(f"{where}: {problem}; nothing was added")
+    return values

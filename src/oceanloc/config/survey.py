@@ -58,6 +58,11 @@ from oceanloc.planning.site_planners import (
 )
 from oceanloc.units import DEG
 
+MAX_RUNS = 10_000_000
+"""Most Monte Carlo runs a scenario may ask for."""
+MAX_RESULT_BYTES = 4 * 2**30
+"""Most memory the results of one Monte Carlo may take, bytes (checked before it starts)."""
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class EstimatorSettings:
@@ -124,6 +129,25 @@ class SurveyScenario:
     def n_transponders(self) -> int:
         return int(self.transponders_enu_m.shape[0])
 
+    def bytes_per_run(self) -> int:
+        """Memory a Monte Carlo run of this scenario needs, bytes (an upper estimate): per epoch the
+        sites, RMSEE, log det and, per transponder, the estimate, its 3x3 covariance and NEES (float64)."""
+        return 8 * (self.epochs + 1) * (5 + self.n_transponders * (3 + 9 + 1))
+
+    def check_runs(self, runs: int, *, max_bytes: int = MAX_RESULT_BYTES) -> None:
+        """Raise ConfigError if ``runs`` exceeds :data:`MAX_RUNS` or would need more than ``max_bytes``.
+
+        Checked before anything is allocated; the message says how much memory and what to change.
+        """
+        need = runs * self.bytes_per_run()
+        if runs > MAX_RUNS or need > max_bytes:
+            fit = max(1, min(MAX_RUNS, max_bytes // self.bytes_per_run()))
+            raise ConfigError(
+                f"--runs {runs}: {runs} runs of {self.name!r} ({self.epochs} epochs, {self.n_transponders} "
+                f"transponders) need about {need / 2**30:.3g} GiB of results (limit {max_bytes / 2**30:.3g} "
+                f"GiB, at most {MAX_RUNS} runs); use --runs {fit} or fewer, or fewer --epochs"
+            )
+
     def with_planner(self, planner: PlannerSettings) -> SurveyScenario:
         """The same scenario with another planner."""
         return dataclasses.replace(self, planner=planner)
@@ -152,6 +176,18 @@ class SurveyScenario:
         return scen
 
 
+MIN_PRIOR_SIGMA_M = 1e-3
+"""Smallest prior 1-sigma per axis, metres (below it the prior information overflows: 5e-324 m gives inf)."""
+MAX_PRIOR_SIGMA_M = 1e5
+"""Largest prior 1-sigma per axis, metres (far beyond any acoustic range; 1e160 m squares to inf)."""
+MAX_EXTENT_M = 1e5
+"""Largest horizontal coordinate of a start or transponder position (and reach), metres from the origin."""
+MAX_DEPTH_M = 11_000.0
+"""Deepest transponder, metres below the surface (the deepest ocean)."""
+MAX_TRANSPONDERS = 64
+"""Most transponders in one survey scenario."""
+
+
 def builtin_survey_scenarios() -> list[str]:
     """Names of the survey scenarios shipped with oceanloc."""
     return builtin_names("survey")
@@ -172,27 +208,31 @@ def survey_scenario_from_table(root: Table) -> SurveyScenario:
     head.check_unknown()
 
     veh = root.table("vehicle")
-    start = veh.vector("start_enu_m", 3)
+    start = veh.vector("start_enu_m", 3, lo=-MAX_EXTENT_M, hi=MAX_EXTENT_M)
     start_yaw = veh.float("start_yaw_deg", 0.0, lo=-360.0, hi=360.0) * DEG
-    speed = veh.float("speed_mps", 3.0, lo=0.0, lo_open=True, hi=100.0)
-    period = veh.float("period_s", 1.0, lo=0.0, lo_open=True, hi=3600.0)
-    w_max = veh.float("max_yaw_rate_deg_s", 30.0, lo=0.0, lo_open=True, hi=3600.0) * DEG
+    speed = veh.float("speed_mps", 3.0, lo=1e-3, hi=100.0)
+    period = veh.float("period_s", 1.0, lo=1e-3, hi=3600.0)
+    w_max = veh.float("max_yaw_rate_deg_s", 30.0, lo=1e-3, hi=3600.0) * DEG
     veh.check_unknown()
 
     sensor = root.table("sensor")
-    sigma = sensor.float("sigma_range_m", lo=0.0, lo_open=True, hi=1e4)
+    sigma = sensor.float("sigma_range_m", lo=1e-6, hi=1e3)
     sensor.check_unknown()
 
     prior = root.table("prior")
-    prior_sigma = prior.vector("sigma_enu_m", 3, positive=True)
+    prior_sigma = prior.vector("sigma_enu_m", 3, lo=MIN_PRIOR_SIGMA_M, hi=MAX_PRIOR_SIGMA_M)
     prior.check_unknown()
 
     tables = root.tables("transponders", min_count=1)
+    if len(tables) > MAX_TRANSPONDERS:
+        raise root.error("transponders", f"at most {MAX_TRANSPONDERS} transponders, got {len(tables)}")
     positions = []
     for t in tables:
-        pos = t.vector("enu_m", 3)
-        if pos[2] >= 0.0:
-            raise t.error("enu_m", f"transponders lie below the surface (z < 0), got z = {pos[2]}")
+        pos = t.vector("enu_m", 3, lo=-MAX_EXTENT_M, hi=MAX_EXTENT_M)
+        if not -MAX_DEPTH_M <= pos[2] < 0.0:
+            raise t.error(
+                "enu_m", f"transponders lie below the surface, z in [-{MAX_DEPTH_M:g}, 0) m, got z = {pos[2]}"
+            )
         positions.append(pos)
         t.check_unknown()
 
@@ -200,20 +240,20 @@ def survey_scenario_from_table(root: Table) -> SurveyScenario:
     planner = PlannerSettings(
         kind=plan_t.str("kind", "lookahead", choices=SITE_PLANNER_KINDS),  # type: ignore[arg-type]
         horizon=plan_t.int("horizon", 1, lo=1, hi=10),
-        max_distance_m=plan_t.float("max_distance_m", 5.0, lo=0.0, lo_open=True),
+        max_distance_m=plan_t.float("max_distance_m", 5.0, lo=0.0, lo_open=True, hi=MAX_EXTENT_M),
     )
     plan_t.check_unknown()
 
     est_t = root.table("estimator", required=False)
     estimator = EstimatorSettings(
-        delta_min_m=est_t.float("delta_min_m", 1e-6, lo=0.0, lo_open=True),
+        delta_min_m=est_t.float("delta_min_m", 1e-6, lo=1e-12, hi=1.0),
         max_iterations=est_t.int("max_iterations", 200, lo=1, hi=10_000),
     )
     est_t.check_unknown()
 
     mc = root.table("montecarlo", required=False)
-    runs = mc.int("runs", 100, lo=1, hi=10_000_000)
-    seed = mc.int("seed", 0, lo=0)
+    runs = mc.int("runs", 100, lo=1, hi=MAX_RUNS)
+    seed = mc.int("seed", 0, lo=0, hi=2**63 - 1)
     mc.check_unknown()
     root.check_unknown()
 

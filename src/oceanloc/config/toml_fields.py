@@ -157,8 +157,10 @@ class Table:
         default: Any = _MISSING,
         *,
         positive: bool = False,
+        lo: float | None = None,
+        hi: float | None = None,
     ) -> FloatArray:
-        """A list of finite numbers, of ``length`` if given."""
+        """A list of finite numbers, of ``length`` if given, each in ``[lo, hi]`` when given."""
         value = self._get(key, default)
         if isinstance(value, np.ndarray):
             value = value.tolist()
@@ -176,6 +178,10 @@ class Table:
             raise self.error(key, f"must hold finite numbers, got {value!r}")
         if positive and not np.all(arr > 0):
             raise self.error(key, f"must hold positive numbers, got {value!r}")
+        outside = (arr < lo if lo is not None else False) | (arr > hi if hi is not None else False)
+        if np.any(outside):
+            bounds = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+            raise self.error(key, f"must hold numbers in {bounds}, got {value!r}")
         return arr
 
     def table(self, key: str, *, required: bool = True) -> Table:

@@ -108,6 +108,16 @@ class CorrelatedRangeProblem:
         return w_resid[None, :], w_jac[None, :, :]
 
 
+MIN_BEACON_RANGES = 4
+"""Ranges a beacon needs to be localized (three position coordinates, one redundancy)."""
+
+
+def beacon_range_counts(aligned: AlignedRanges) -> dict[int, int]:
+    """Per beacon of the log, its number of aligned ranges."""
+    beacons, counts = np.unique(aligned.beacon, return_counts=True)
+    return {int(b): int(c) for b, c in zip(beacons, counts, strict=True)}
+
+
 def localize_beacons(
     aligned: AlignedRanges,
     *,
@@ -118,6 +128,7 @@ def localize_beacons(
     max_outlier_fraction: float = 0.25,
     sigma_gps_m: float = 1.0,
     gps_correlation_s: float | None = 60.0,
+    skip_short: bool = False,
 ) -> list[BeaconEstimate]:
     """Localize every beacon in the log (see the module docstring).
 
@@ -134,6 +145,9 @@ def localize_beacons(
         ``sqrt(sigma_eps^2 - sigma_gps^2)``, is white.
     gps_correlation_s : float or None
         Time constant of the GPS error; None treats it as white (the journal's model).
+    skip_short : bool
+        Leave out a beacon with fewer than :data:`MIN_BEACON_RANGES` ranges (else it is a
+        :class:`DataError`); :func:`beacon_range_counts` says which.
     """
     if gps_correlation_s is not None:
         if gps_correlation_s <= 0.0:
@@ -149,7 +163,9 @@ def localize_beacons(
         sel = aligned.select(int(beacon))
         sensors = aligned.vehicle_enu_m[sel]
         z = aligned.range_m[sel]
-        if z.size < 4:
+        if z.size < MIN_BEACON_RANGES and skip_short:
+            continue
+        if z.size < MIN_BEACON_RANGES:
             raise DataError(f"beacon {beacon}: {z.size} ranges, need at least 4")
         i0 = int(np.argmin(z))
         mean = np.array([[sensors[i0, 0], sensors[i0, 1], surface - prior_depth_m]])

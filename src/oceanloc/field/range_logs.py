@@ -8,12 +8,13 @@ GPS fix of the log, as in the papers ("centered at the earliest collected GPS lo
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.noise import (
     StationaryNoise,
     stationary_mask,
@@ -21,7 +22,12 @@ from oceanloc.estimation.noise import (
     stationary_segments,
     total_range_sigma_m,
 )
-from oceanloc.estimation.range_logs import BeaconEstimate, localize_beacons
+from oceanloc.estimation.range_logs import (
+    MIN_BEACON_RANGES,
+    BeaconEstimate,
+    beacon_range_counts,
+    localize_beacons,
+)
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.qc import QcReport
@@ -75,8 +81,11 @@ def read_log_pair(
     origin: EnuOrigin | None = None,
     sound_speed_mps: float = 1500.0,
     max_gap_s: float = 2.0,
+    beacons: Collection[int] | None = None,
 ) -> LogPair:
     """Read an NMEA GPS log and a USBL range CSV and align the ranges to the GPS track.
+
+    With ``beacons`` (the expected beacon ids) a range to any other beacon is a QC line (unknown beacon).
 
     Raises
     ------
@@ -84,7 +93,7 @@ def read_log_pair(
         If no range has a GPS fix within ``max_gap_s``.
     """
     gps_log = read_nmea(gps)
-    range_log = read_usbl(ranges, sound_speed_mps=sound_speed_mps)
+    range_log = read_usbl(ranges, sound_speed_mps=sound_speed_mps, beacons=beacons)
     aligned = align_ranges(gps_log, range_log, origin=origin, max_gap_s=max_gap_s)
     if aligned.range_m.size == 0:
         raise ConfigError(f"{ranges}: no range has a GPS fix within {max_gap_s:g} s in {gps}")
@@ -118,10 +127,18 @@ class LogLocalization:
     geodetic: np.ndarray
     truth_enu_m: dict[int, np.ndarray] | None = None
     truth_path: str | None = None
+    not_localized: tuple[tuple[int, int], ...] = ()
 
     @property
     def inputs(self) -> list[str]:
         return self.logs.inputs + ([self.truth_path] if self.truth_path else [])
+
+    def not_localized_lines(self) -> list[str]:
+        """One line per beacon left out: ``beacon 9: 1 range, not localized (needs 4)``."""
+        return [
+            f"beacon {b}: {n} range{'' if n == 1 else 's'}, not localized (needs {MIN_BEACON_RANGES})"
+            for b, n in self.not_localized
+        ]
 
     def error_m(self, i: int) -> float | None:
         """Distance from estimate ``i`` to its true position, metres (None without truth)."""
@@ -155,6 +172,7 @@ class LogLocalization:
             "beacons": beacons,
             "qc": self.logs.qc.counts(),
             "dropped_no_gps": self.logs.aligned.dropped_no_gps,
+            "not_localized": [{"beacon": b, "ranges": n} for b, n in self.not_localized],
             "truth_file": self.truth_path,
         }
 
@@ -170,16 +188,39 @@ def localize_log_files(
     sigma_range_m: float = 1.006,
     sigma_gps_m: float = 1.0,
     gps_correlation_s: float | None = 60.0,
+    beacons: Collection[int] | None = None,
 ) -> LogLocalization:
     """Locate every beacon of a GPS + range log pair (:func:`oceanloc.estimation.range_logs.
-    localize_beacons`); with ``truth`` (a ``truth.json`` of ``simulate logs``) each error is measured."""
+    localize_beacons`); with ``truth`` (a ``truth.json`` of ``simulate logs``) each error is measured.
+
+    ``beacons`` names the expected beacons: ranges to any other are QC'd (unknown beacon). A beacon with
+    fewer than :data:`MIN_BEACON_RANGES` ranges (a stray reply, or an expected beacon barely heard) is
+    not localized but listed in :attr:`LogLocalization.not_localized`, and the others are solved.
+
+    Raises
+    ------
+    DataError
+        If no beacon has enough ranges.
+    """
     known = None if truth is None else read_truth(truth)  # a bad truth file fails before the work
-    logs = read_log_pair(gps, ranges, origin=origin, sound_speed_mps=sound_speed_mps, max_gap_s=max_gap_s)
+    logs = read_log_pair(
+        gps, ranges, origin=origin, sound_speed_mps=sound_speed_mps, max_gap_s=max_gap_s, beacons=beacons
+    )
+    counts = beacon_range_counts(logs.aligned)
+    counts.update({int(b): 0 for b in beacons or () if int(b) not in counts})
+    short = tuple(sorted((b, n) for b, n in counts.items() if n < MIN_BEACON_RANGES))
+    if len(short) == len(counts):
+        listed = ", ".join(f"{b}: {n}" for b, n in short)
+        raise DataError(
+            f"{ranges}: no beacon has the {MIN_BEACON_RANGES} ranges with GPS it needs (ranges per beacon: "
+            f"{listed})"
+        )
     estimates = localize_beacons(
         logs.aligned,
         sigma_range_m=sigma_range_m,
         sigma_gps_m=sigma_gps_m,
         gps_correlation_s=gps_correlation_s,
+        skip_short=True,
     )
     pos = np.array([e.position_enu_m for e in estimates]).reshape(-1, 3)
     geo = enu_to_geodetic(pos, logs.origin).reshape(-1, 3)
@@ -190,6 +231,7 @@ def localize_log_files(
         geodetic=geo,
         truth_enu_m=truth_enu,
         truth_path=None if truth is None else str(truth),
+        not_localized=short,
     )
 
 

@@ -214,9 +214,14 @@ class Journal:
             raise DataError(f"{self.path}: no survey journal here (start one with `oceanloc survey start`)")
         if create and not self.path.parent.is_dir():
             raise DataError(f"{self.path}: folder {self.path.parent} does not exist")
+        # A journal in a read-only folder (or a read-only file) is opened read-only, so it can still be
+        # read; a write then fails with a message saying why (see _read_only_reason).
+        self.read_only = not create and self._read_only_reason() is not None
         try:
             if create:
                 self._db = sqlite3.connect(self.path, isolation_level=None, timeout=timeout_s)
+            elif self.read_only:
+                self._db = self._connect_read_only(timeout_s)
             else:  # mode=rw: never creates a file
                 uri = f"{self.path.resolve().as_uri()}?mode=rw"
                 self._db = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=timeout_s)
@@ -233,15 +238,29 @@ class Journal:
                 )
             if not create and not {"meta", "fixes", "ranges"} <= names:
                 raise JournalError(f"{self.path}: not a survey journal (no journal tables)")
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=FULL")
-            self._db.executescript(_SCHEMA)
+            if not self.read_only:
+                self._db.execute("PRAGMA journal_mode=WAL")
+                self._db.execute("PRAGMA synchronous=FULL")
+                self._db.executescript(_SCHEMA)
         except sqlite3.Error as exc:
             self._db.close()
             raise JournalError(self._explain(exc, "not a survey journal")) from None
         except DataError:
             self._db.close()
             raise
+
+    def _connect_read_only(self, timeout_s: float) -> sqlite3.Connection:
+        """A read-only connection: ``mode=ro`` where SQLite can use the WAL index beside the file, else
+        ``immutable=1`` (a read-only folder where no ``-shm`` file can be made; no one can write there,
+        and a journal closed cleanly has everything in the main file)."""
+        base = self.path.resolve().as_uri()
+        db = sqlite3.connect(f"{base}?mode=ro", uri=True, isolation_level=None, timeout=timeout_s)
+        try:
+            db.execute("SELECT name FROM sqlite_master").fetchall()
+            return db
+        except sqlite3.Error:
+            db.close()
+        return sqlite3.connect(f"{base}?immutable=1", uri=True, isolation_level=None, timeout=timeout_s)
 
     def _read_only_reason(self) -> str | None:
         """Why SQLite cannot write here (a read-only folder or file), or None."""
@@ -395,6 +414,10 @@ class Journal:
                 self._db.execute("BEGIN IMMEDIATE")
                 cur = self._db.executemany(sql, rows)
         except sqlite3.Error as exc:
+            if self.read_only:
+                raise JournalError(
+                    f"{self.path}: the journal is read-only here: {self._read_only_reason()}"
+                ) from None
             raise JournalError(self._explain(exc, "cannot write to the journal")) from None
         return cur.rowcount
 
@@ -488,10 +511,12 @@ class Journal:
             raise JournalError(self._explain(exc, "cannot read the journal")) from None
         if invalid:
             _LOG.warning(
-                "%s: %d invalid record(s) skipped (first: %s); Journal.remove_invalid() deletes them",
+                "%s: %d invalid record(s) skipped (first: %s); `oceanloc survey check %s` lists "
+                "them, with --remove-invalid it deletes them",
                 self.path,
                 len(invalid),
                 invalid[0],
+                self.path,
             )
         return JournalRecords(
             fix_t_unix_s=fixes[:, 0],

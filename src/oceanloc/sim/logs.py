@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,6 +30,10 @@ from oceanloc.io.usbl import format_utc
 
 PIER_ORIGIN = EnuOrigin(lat_deg=32.705, lon_deg=-117.236, h_m=-1.478)
 """The journal's ENU origin (Section VI-C)."""
+
+
+MAX_LOG_DURATION_S = 7 * 86_400.0
+"""Longest simulated log pair, seconds (a week: about 600 000 fixes, 400 000 ranges, 100 MB of text)."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -57,6 +62,11 @@ class PierLogSettings:
             raise ConfigError("sigma_range_m and bias_m need one value per beacon")
         if not 0.0 <= self.outlier_fraction < 0.5 or not 0.0 <= self.dropout_fraction < 0.9:
             raise ConfigError("outlier_fraction must be in [0, 0.5) and dropout_fraction in [0, 0.9)")
+        if not (math.isfinite(self.duration_s) and self.stationary_s < self.duration_s <= MAX_LOG_DURATION_S):
+            raise ConfigError(
+                f"duration {self.duration_s:g} s is not in ({self.stationary_s:g}, {MAX_LOG_DURATION_S:g}] s "
+                "(longer than the stationary segment, at most a week of logs)"
+            )
         if self.duration_s <= self.stationary_s or self.gps_rate_hz <= 0 or self.range_rate_hz <= 0:
             raise ConfigError("duration must exceed the stationary segment; rates must be positive")
 
