@@ -69,3 +69,41 @@ def test_resolve_workers_names_the_option_and_reads_local_n():
         resolve_workers(0)
     with pytest.raises(ConfigError, match="local:N needs an integer"):
         resolve_workers(None, "local:x")
+
+
+def test_a_run_count_whose_results_do_not_fit_is_refused_before_the_runs_start():
+    from oceanloc.evaluation.montecarlo import check_result_memory, result_nbytes, run_chunked
+
+    calls = []
+
+    def task(idx):
+        calls.append(idx.size)
+        return {"errors": np.zeros((idx.size, 1000))}  # 8000 bytes per run
+
+    assert result_nbytes(task(np.arange(3))) == 24_000
+    calls.clear()
+    with pytest.raises(
+        ConfigError, match=r"10000000 runs would hold about 74.5 GiB .* use --runs 1073741 or fewer"
+    ):
+        run_chunked(task, 10_000_000)
+    assert calls == [1]  # one probe run, nothing else started
+    check_result_memory(task, 5_000)  # under the probe threshold: no probe, no error
+    assert calls == [1]
+
+
+def test_a_billion_runs_from_the_command_line_is_one_line_and_exit_2():
+    import os
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [sys.executable, "-m", "oceanloc", "simulate", "drift-follow", "--runs", "1000000000"],
+        capture_output=True,
+        text=True,
+        env=os.environ,
+        timeout=300,
+    )
+    assert result.returncode == 2, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert "Traceback" not in result.stderr
+    assert lines[-1].startswith("error: 1000000000 runs would hold about") and "use --runs" in lines[-1]

@@ -38,6 +38,46 @@ def chunk_indices(n_runs: int, chunk_size: int) -> list[np.ndarray]:
     return [np.arange(s, min(s + chunk_size, n_runs)) for s in range(0, n_runs, chunk_size)]
 
 
+MAX_RESULT_GIB = 8.0
+"""Largest Monte Carlo result (all runs' arrays together) a run may build, GiB."""
+
+PROBE_ABOVE_RUNS = 10_000
+"""Above this many runs, one run is computed first to measure a run's result before the rest start."""
+
+
+def result_nbytes(result: Any) -> int:
+    """Bytes held by the arrays of a chunk result (a dataclass's array fields and dicts of arrays)."""
+    if isinstance(result, np.ndarray):
+        return int(result.nbytes)
+    if isinstance(result, dict):
+        return sum(result_nbytes(v) for v in result.values())
+    if isinstance(result, list | tuple):
+        return sum(result_nbytes(v) for v in result)
+    if dataclasses.is_dataclass(result) and not isinstance(result, type):
+        return sum(result_nbytes(getattr(result, f.name)) for f in dataclasses.fields(result))
+    return 0
+
+
+def check_result_memory(
+    task: Callable[[np.ndarray], Any], n_runs: int, max_gib: float = MAX_RESULT_GIB
+) -> None:
+    """Refuse, before the runs start, a run count whose results would not fit in ``max_gib``.
+
+    Above :data:`PROBE_ABOVE_RUNS` runs one run (run 0) is computed to measure what a run's result holds;
+    results do not depend on chunking, so the probe changes nothing. The message says how many runs fit.
+    """
+    if n_runs <= PROBE_ABOVE_RUNS:
+        return
+    per_run = max(result_nbytes(task(np.arange(1))), 1)
+    need = per_run * n_runs
+    if need > max_gib * 2**30:
+        fit = int(max_gib * 2**30 // per_run)
+        raise ConfigError(
+            f"{n_runs} runs would hold about {need / 2**30:.3g} GiB of results ({per_run} bytes per run; "
+            f"limit {max_gib:g} GiB): use --runs {fit} or fewer"
+        )
+
+
 def default_chunk_size(n_runs: int, workers: int) -> int:
     """About four chunks per worker, at most 250 runs each: enough to balance, large enough to vectorize."""
     return max(1, min(250, math.ceil(n_runs / (4 * max(workers, 1)))))
@@ -66,6 +106,9 @@ def run_chunked(
     progress : callable, optional
         Called with the number of runs just finished.
     """
+    if n_runs < 1:
+        raise ConfigError(f"the number of runs must be at least 1, got {n_runs}")
+    check_result_memory(task, n_runs)
     workers = _executor_workers(executor)
     chunks = chunk_indices(n_runs, chunk_size or default_chunk_size(n_runs, workers))
     if executor is None:
