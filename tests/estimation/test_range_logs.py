@@ -12,6 +12,7 @@ from oceanloc.io.usbl import align_ranges, read_usbl
 from oceanloc.sim.logs import PIER_ORIGIN, PierLogSettings, simulate_pier_logs
 
 
+@pytest.mark.slow  # a Monte Carlo of simulated pier logs (15-35 s): `make test-slow`
 def test_correlated_gps_model_makes_the_horizontal_covariance_consistent(tmp_path: Path):
     # The simulated DGPS error is Gauss-Markov (1 m, 60 s). Horizontal NEES of beacon 1 over 8 seeded
     # 20-minute logs: chi-square with 2 dof, so the mean of 8 has standard error 2 / sqrt(8) = 0.71;

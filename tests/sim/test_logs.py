@@ -1,6 +1,7 @@
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from oceanloc.estimation.noise import running_range_noise
 from oceanloc.estimation.range_logs import localize_beacons
@@ -26,6 +27,7 @@ def _errors(tmp: Path, outlier_fraction: float, seeds: range) -> np.ndarray:
     return np.asarray(errs)
 
 
+@pytest.mark.slow  # a Monte Carlo of simulated pier logs (15-35 s): `make test-slow`
 def test_multipath_outliers_cost_at_most_half_the_clean_error(tmp_path: Path):
     # Same seeds, so the GPS errors and the clean ranges are identical; only 5% of ranges get +5..+30 m.
     # Issue acceptance: RMS error with outliers within 1.5 times the clean RMS error (6 seeds, 2 beacons).
