@@ -7,6 +7,7 @@ reaches rich, so ``[/x]`` or ``[sensor]`` prints as written.
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -26,7 +27,19 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from oceanloc.errors import ConfigError
 from oceanloc.io import records
 
-console = Console()
+PIPED_WIDTH = 100
+"""Columns for tables when stdout is not a terminal and ``COLUMNS`` is unset (rich would assume 80, and
+the tables are laid out to fit 100)."""
+
+
+def _stdout_console() -> Console:
+    plain = Console()
+    if plain.is_terminal or "COLUMNS" in os.environ:
+        return plain
+    return Console(width=PIPED_WIDTH)
+
+
+console = _stdout_console()
 err_console = Console(stderr=True, soft_wrap=True)
 """Messages on stderr are never wrapped: a QC line or an error stays one line, whatever the width."""
 

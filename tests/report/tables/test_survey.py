@@ -44,7 +44,8 @@ def test_single_survey_tables_print_truth_and_estimates():
     survey = single_survey(load_survey_scenario("garcia2019-m1").with_overrides(epochs=5), seed=2)
     text = _render(tables.single_survey_table(survey))
     assert all(len(line) <= 100 for line in text.splitlines())
-    assert "17.00, 15.00, -6.00" in text and "sd U (m)" in text and "@ deg" in text
+    assert "17.00, 15.00, -6.00" in text and "sd U (m)" in text and "@ az" in text
+    assert "clockwise from north" in text
     epochs = " ".join(_render(tables.single_survey_epoch_table(survey)).split())
     assert "log det Y_n (nats)" in epochs
 

@@ -31,28 +31,30 @@ def _triple(v: np.ndarray) -> str:
 
 def single_survey_table(survey: SingleSurvey) -> Table:
     """Each transponder's truth, final estimate, error, 95 % horizontal ellipse (semi-axes and the major
-    axis' direction counter-clockwise from east) and vertical standard deviation after one survey."""
+    axis' azimuth, degrees clockwise from north in [0, 180), the convention of every printed bearing) and
+    vertical standard deviation after one survey."""
     scen, ell = survey.scenario, survey.ellipses
     label = escape(site_planner_label(scen.planner))
     title = f"{escape(scen.name)}: after {scen.epochs} epochs (planner {label}, seed {survey.seed})"
-    table = Table(title=title)
+    table = Table(title=title, caption="az: the 95 % ellipse's major axis, degrees clockwise from north")
     for col in (
         "m",
         "truth E,N,U (m)",
         "estimate E,N,U (m)",
         "error (m)",
-        "95% a x b (m) @ deg",
+        "95% a x b (m) @ az",
         "sd U (m)",
     ):
         table.add_column(col, justify="right", no_wrap=True)
     errors = survey.error_norm_m[-1]
+    azimuth = (90.0 - np.degrees(ell.angle_rad)) % 180.0
     for m in range(scen.n_transponders):
         table.add_row(
             str(m + 1),
             _triple(scen.transponders_enu_m[m]),
             _triple(survey.final_estimates_m[m]),
             f"{errors[m]:.3f}",
-            f"{ell.semi_major_m[m]:.3f} x {ell.semi_minor_m[m]:.3f} @ {np.degrees(ell.angle_rad[m]):+.0f}",
+            f"{ell.semi_major_m[m]:.3f} x {ell.semi_minor_m[m]:.3f} @ {azimuth[m]:.0f}",
             f"{survey.sigma_up_m[m]:.3f}",
         )
     return table
