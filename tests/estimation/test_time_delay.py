@@ -148,7 +148,8 @@ def test_phat_over_the_detected_band_is_within_two_hundredths():
 
 def test_recording_too_short_for_the_delay_search_is_reported():
     rng = np.random.default_rng(0)
-    with pytest.raises(DataError, match=r"too short for a delay search of \+-0.1 s: need more than 1600"):
+    expected = r"too short for a delay search of \+-0.1 s: each must last at least 0.2 s"
+    with pytest.raises(DataError, match=expected):
         estimate_delay(rng.standard_normal(800), rng.standard_normal(800), FS, max_delay_s=0.1)
     with pytest.raises(ConfigError, match="band must be 'auto'"):
         estimate_delay(rng.standard_normal(800), rng.standard_normal(800), FS, band_hz="whole")

@@ -303,12 +303,17 @@ def estimate_delay(
         raise ConfigError(f"band must be 0 <= low < high, got {band_hz}")
     if not np.any(x) or not np.any(y):
         raise DataError("a recording is silent (all samples zero): no delay can be estimated")
-    if max_delay_s is not None and max_delay_s * sample_rate_hz >= max(x.size, y.size):
-        raise DataError(
-            f"recordings of {x.size} and {y.size} samples ({max(x.size, y.size) / sample_rate_hz:.6g} s)"
-            f" are too short for a delay search of +-{max_delay_s:g} s: need more than"
-            f" {int(np.ceil(max_delay_s * sample_rate_hz))} samples"
-        )
+    if max_delay_s is not None:
+        if not max_delay_s > 0:
+            raise ConfigError(f"max delay must be positive, got {max_delay_s}")
+        if min(x.size, y.size) / sample_rate_hz < 2.0 * max_delay_s:
+            # At a lag near the recording's length the two overlap by a few samples: no delay there is
+            # measured, so a search that reaches it is not answered.
+            raise DataError(
+                f"recordings of {x.size / sample_rate_hz:.6g} s and {y.size / sample_rate_hz:.6g} s are too "
+                f"short for a delay search of +-{max_delay_s:g} s: each must last at least "
+                f"{2.0 * max_delay_s:g} s (twice the search window); record longer or search a shorter delay"
+            )
     spec, n_fft, sd_s, used_band = _cross_spectrum(x, y, method, sample_rate_hz, band_hz)
     corr = scipy.fft.irfft(spec, n_fft)
     # The analytic correlation, whose magnitude is the envelope, from the one-sided spectrum.
@@ -321,20 +326,9 @@ def estimate_delay(
     envelope = np.concatenate([analytic[n_fft - (y.size - 1) :], analytic[: x.size]])
     window = np.ones(lags.size, dtype=bool)
     if max_delay_s is not None:
-        if not max_delay_s > 0:
-            raise ConfigError(f"max delay must be positive, got {max_delay_s}")
         window = np.abs(lags) <= max_delay_s * sample_rate_hz
         if window.sum() < 3:
             raise ConfigError(f"max delay {max_delay_s} s is shorter than a sample at {sample_rate_hz:g} Hz")
-        shortest = min(x.size, y.size) / sample_rate_hz
-        if shortest < 2.0 * max_delay_s:
-            # At a lag near the recording's length the two overlap by a few samples: no delay there is
-            # measured, so a search that reaches it is not answered.
-            raise DataError(
-                f"recordings of {x.size / sample_rate_hz:.6g} s and {y.size / sample_rate_hz:.6g} s are too "
-                f"short for a delay search of +-{max_delay_s:g} s: each must last at least "
-                f"{2.0 * max_delay_s:g} s (twice the search window); record longer or search a shorter delay"
-            )
     search = np.where(window, values, -np.inf)
     i = int(np.argmax(search))
     peak = float(lags[i])
