@@ -11,8 +11,11 @@ the page, and a PNG screenshot. Needs the PyPI package ``websocket-client``.
 from __future__ import annotations
 
 import base64
+import contextlib
 import json
+import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -138,7 +141,9 @@ def load_page(
     if exe is None:
         raise RuntimeError("chromium not found (Debian: apt-get install chromium)")
     deadline = time.monotonic() + timeout_s
-    with tempfile.TemporaryDirectory(prefix="oceanloc-chromium-") as tmp:
+    # Chromium's helper processes can still write to the profile for a moment after it exits: the whole
+    # process group is ended below, and a straggler's file never turns a finished load into an error.
+    with tempfile.TemporaryDirectory(prefix="oceanloc-chromium-", ignore_cleanup_errors=True) as tmp:
         profile = Path(tmp)
         args = [
             exe,
@@ -159,7 +164,9 @@ def load_page(
             f"--window-size={width},{height}",
             "about:blank",
         ]
-        proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+        )
         try:
             port = _devtools_port(profile, proc, deadline)
             with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=5) as r:
@@ -171,12 +178,19 @@ def load_page(
             finally:
                 cdp.close()
         finally:
-            proc.terminate()
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            _end_group(proc)
+
+
+def _end_group(proc: subprocess.Popen) -> None:
+    """Terminate Chromium and every helper process it started (its own session), then reap it."""
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(proc.pid, sig)
+        try:
+            proc.wait(timeout=5)
+            return
+        except subprocess.TimeoutExpired:
+            continue
 
 
 def _drive(cdp: _Cdp, url: str, expression: str, ready: str, deadline: float) -> PageLoad:
