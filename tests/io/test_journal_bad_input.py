@@ -215,9 +215,12 @@ def test_commands_reading_a_poisoned_journal_still_work(tmp_path: Path, capsys):
 
 
 def _damage(path: Path, where: str, page_size: int = 4096) -> None:
-    """Overwrite most of one page: the header page (after the magic string), a middle or the last page."""
+    """Overwrite most of one page: the header page (after the magic string), a middle page of the records
+    (between the tables' root pages and the end) or the last page."""
     n_pages = path.stat().st_size // page_size
-    page = {"header": 0, "middle": n_pages // 2, "last": n_pages - 1}[where]
+    with sqlite3.connect(path) as db:
+        roots = max(r[0] for r in db.execute("SELECT rootpage FROM sqlite_master"))
+    page = {"header": 0, "middle": (roots + n_pages) // 2, "last": n_pages - 1}[where]
     with path.open("r+b") as f:
         f.seek(page * page_size + 16 * (page == 0))
         f.write(bytes(range(256)) * (page_size // 256 - 1))

@@ -18,5 +18,6 @@ from oceanloc.cli import (  # noqa: F401
     simulate_logs,
     simulate_survey,
     survey_journal,
+    survey_run,
     tdoa,
 )

@@ -72,6 +72,13 @@ def start(
         float, typer.Option(help="Sound speed for travel-time range files, m/s.")
     ] = 1500.0,
     max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate a range across, s.")] = 2.0,
+    sigma_gps: Annotated[
+        float | None,
+        typer.Option(help="GPS part of the range sigma, m (default 1 m when the sigma is above it, else 0)."),
+    ] = None,
+    gps_correlation: Annotated[
+        float, typer.Option(help="Time constant of the GPS error, s (0: white).")
+    ] = 60.0,
 ) -> None:
     """Start a survey: create the journal and store its settings (never overwritten later)."""
     settings = JournalSettings(
@@ -87,6 +94,8 @@ def start(
         heading_deg=heading,
         sound_speed_mps=sound_speed,
         max_gap_s=max_gap,
+        sigma_gps_m=sigma_gps,
+        gps_correlation_s=gps_correlation if gps_correlation > 0 else None,
     )
     with Journal.start(journal, settings.to_meta()):
         pass

@@ -53,6 +53,12 @@ class JournalSettings:
         Sound speed for travel-time columns of range files, m/s.
     max_gap_s : float
         Largest GPS gap a range is interpolated across, seconds.
+    sigma_gps_m : float or None
+        The GPS part of ``sigma_range_m`` (horizontal, per axis), metres; below it. The pier journal's
+        differential GPS: 1 m; an RTK receiver: a few centimetres. None: 1 m where ``sigma_range_m`` is
+        above it, else 0 (see :attr:`gps_sigma_m`).
+    gps_correlation_s : float or None
+        Time constant of the GPS error (Gauss-Markov), seconds; None treats it as white.
     """
 
     planner: PlannerSettings = dataclasses.field(default_factory=lambda: PlannerSettings(kind="greedy"))
@@ -67,6 +73,8 @@ class JournalSettings:
     heading_deg: float | None = None
     sound_speed_mps: float = 1500.0
     max_gap_s: float = 2.0
+    sigma_gps_m: float | None = None
+    gps_correlation_s: float | None = 60.0
 
     def __post_init__(self) -> None:
         positive = ("max_yaw_rate_rad_s", "speed_mps", "period_s", "sigma_range_m", "max_gap_s")
@@ -74,6 +82,19 @@ class JournalSettings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ConfigError(f"survey setting {name} must be a positive number, got {value}")
+        gps = self.sigma_gps_m
+        if gps is not None and not (math.isfinite(gps) and 0.0 <= gps < self.sigma_range_m):
+            raise ConfigError(
+                f"survey setting sigma_gps_m ({gps} m) must be 0 or more and below sigma_range_m "
+                f"({self.sigma_range_m} m), the total range sigma it is part of"
+            )
+        if self.gps_correlation_s is not None and not (
+            math.isfinite(self.gps_correlation_s) and self.gps_correlation_s > 0.0
+        ):
+            raise ConfigError(
+                "survey setting gps_correlation_s must be a positive number of seconds, "
+                f"got {self.gps_correlation_s}"
+            )
         if len(self.prior_sigma_enu_m) != 3 or not all(
             math.isfinite(s) and s > 0 for s in self.prior_sigma_enu_m
         ):
@@ -93,6 +114,13 @@ class JournalSettings:
         if len(set(self.beacons)) != len(self.beacons) or any(b < 0 for b in self.beacons):
             raise ConfigError(f"survey setting beacons must be distinct non-negative ids, got {self.beacons}")
 
+    @property
+    def gps_sigma_m(self) -> float:
+        """The GPS part of the range sigma in use, metres (``sigma_gps_m`` or its default)."""
+        if self.sigma_gps_m is not None:
+            return self.sigma_gps_m
+        return 1.0 if self.sigma_range_m > 1.0 else 0.0
+
     def to_meta(self) -> dict[str, str]:
         """The settings as journal meta entries (JSON values; angles in degrees)."""
         o = self.origin
@@ -111,6 +139,8 @@ class JournalSettings:
             "heading_deg": self.heading_deg,
             "sound_speed_mps": self.sound_speed_mps,
             "max_gap_s": self.max_gap_s,
+            "sigma_gps_m": self.sigma_gps_m,
+            "gps_correlation_s": self.gps_correlation_s,
         }
         return {k: json.dumps(v) for k, v in values.items()}
 
@@ -150,8 +180,21 @@ class JournalSettings:
                 heading_deg=None if get("heading_deg") is None else float(get("heading_deg")),
                 sound_speed_mps=float(get("sound_speed_mps")),
                 max_gap_s=float(get("max_gap_s")),
+                **_gps_settings(meta, get),
             )
         except (TypeError, ValueError, IndexError) as exc:
             if isinstance(exc, DataError):
                 raise
             raise DataError(f"{source}: malformed survey settings ({exc})") from None
+
+
+def _gps_settings(meta: Mapping[str, str], get: Any) -> dict[str, Any]:
+    """The GPS error settings; a journal started before they existed keeps the defaults."""
+    if "sigma_gps_m" in meta:
+        corr = get("gps_correlation_s")
+        gps = get("sigma_gps_m")
+        return {
+            "sigma_gps_m": None if gps is None else float(gps),
+            "gps_correlation_s": None if corr is None else float(corr),
+        }
+    return {}

@@ -327,6 +327,8 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
             sigma_range_m=settings.sigma_range_m,
             prior_sigma_enu_m=settings.prior_sigma_enu_m,
             prior_depth_m=settings.prior_depth_m,
+            sigma_gps_m=settings.gps_sigma_m,
+            gps_correlation_s=settings.gps_correlation_s if settings.gps_sigma_m > 0.0 else None,
         )
         if ready.size
         else []

@@ -18,10 +18,15 @@ first write. Should a bad record be in a journal anyway (written by an older ver
 readers skip it and report it (:attr:`JournalRecords.invalid`, a logged warning), so every command still
 works, and :meth:`Journal.remove_invalid` deletes it. SQLite failures are :class:`JournalError` naming
 the journal: damaged pages, a read-only folder, a lock held past the timeout.
+
+A live survey (``oceanloc survey run``) also keeps the USBL angles of each range (table ``usbl``, written
+in the range's transaction) and its *events* (table ``events``: each epoch's estimate, plan and command
+sent, link states, start and stop, as JSON), so a survey can be audited and replayed afterwards.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import os
@@ -45,6 +50,7 @@ from oceanloc.io.qc import (
     out_of_range,
     time_problem,
 )
+from oceanloc.io.records import to_jsonable
 from oceanloc.io.usbl import RangeLog
 
 FORMAT_KEY = "format"
@@ -60,7 +66,7 @@ HEADING_RANGE_DEG: tuple[float, float] = (0.0, 360.0)
 """True headings the journal stores, degrees clockwise from north."""
 
 _SQLITE_MAGIC = b"SQLite format 3\x00"
-_TABLES = {"meta", "fixes", "ranges", "headings"}
+_TABLES = {"meta", "fixes", "ranges", "headings", "usbl", "events"}
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS fixes (t REAL PRIMARY KEY, lat REAL NOT NULL, lon REAL NOT NULL, h REAL NOT NULL);
@@ -68,7 +74,15 @@ CREATE TABLE IF NOT EXISTS ranges (t REAL NOT NULL, beacon INTEGER NOT NULL, ran
                                    PRIMARY KEY (t, beacon));
 CREATE TABLE IF NOT EXISTS headings (t REAL NOT NULL, seq INTEGER NOT NULL, heading_deg REAL NOT NULL,
                                      PRIMARY KEY (t, seq));
+CREATE TABLE IF NOT EXISTS usbl (t REAL NOT NULL, beacon INTEGER NOT NULL, azimuth_deg REAL,
+                                 elevation_deg REAL, PRIMARY KEY (t, beacon));
+CREATE TABLE IF NOT EXISTS events (seq INTEGER PRIMARY KEY, t REAL NOT NULL, kind TEXT NOT NULL,
+                                   body TEXT NOT NULL);
 """
+
+EVENT_KINDS: tuple[str, ...] = ("start", "estimate", "plan", "command", "link", "stop")
+"""Kinds of the live survey's journaled events (:meth:`Journal.add_event`): the run's start and options,
+each epoch's estimate, plan and command sent, a link state change (HOLD and why), and the stop."""
 
 
 class JournalError(DataError):
@@ -162,6 +176,16 @@ _VALID_SQL: dict[str, str] = {
 _COLUMNS = {"fixes": "t, lat, lon, h", "ranges": "t, beacon, range_m", "headings": "t, seq, heading_deg"}
 _ORDER = {"fixes": "t", "ranges": "t, beacon", "headings": "t, seq"}
 _PROBLEM = {"fixes": fix_problem, "ranges": range_problem, "headings": heading_problem}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class JournalEvent:
+    """One journaled live-survey event: its number, Unix time (s), kind and JSON body."""
+
+    seq: int
+    t_unix_s: float
+    kind: str
+    body: dict
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -385,6 +409,102 @@ class Journal:
             raise DataError(f"range at {_num(t_unix_s):.12g} s: {problem}")
         row = (float(t_unix_s), int(beacon), float(range_m))
         return self._write("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", [row]) == 1
+
+    def add_usbl_range(
+        self,
+        t_unix_s: float,
+        beacon: int,
+        range_m: float,
+        azimuth_deg: float | None,
+        elevation_deg: float | None,
+    ) -> bool:
+        """Append one range with its USBL angles (degrees; None when the modem gave none), both in one
+        transaction; False if a range at that time and beacon was stored (nothing is changed then)."""
+        if problem := range_problem(t_unix_s, beacon, range_m):
+            raise DataError(f"range at {_num(t_unix_s):.12g} s: {problem}")
+        for name, angle in (("azimuth", azimuth_deg), ("elevation", elevation_deg)):
+            if angle is not None and not (math.isfinite(angle) and -360.0 <= angle <= 360.0):
+                raise DataError(
+                    f"range at {_num(t_unix_s):.12g} s: USBL {name} {angle} deg not in [-360, 360]"
+                )
+        row = (float(t_unix_s), int(beacon), float(range_m))
+        angles = (float(t_unix_s), int(beacon), azimuth_deg, elevation_deg)
+        try:
+            with self._db:
+                self._db.execute("BEGIN IMMEDIATE")
+                new = self._db.execute("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", row).rowcount == 1
+                if new and (azimuth_deg is not None or elevation_deg is not None):
+                    self._db.execute("INSERT OR IGNORE INTO usbl VALUES (?, ?, ?, ?)", angles)
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot write to the journal")) from None
+        return new
+
+    def usbl_angles(self) -> FloatArray:
+        """Stored USBL angles ordered by time and beacon, ``(u, 4)``: t, beacon, azimuth, elevation
+        (degrees; NaN where the modem gave none)."""
+        if not self._has_table("usbl"):
+            return np.zeros((0, 4))
+        rows = self._query("SELECT t, beacon, azimuth_deg, elevation_deg FROM usbl ORDER BY t, beacon")
+        return np.asarray(rows, dtype=float).reshape(-1, 4)
+
+    def add_event(self, t_unix_s: float, kind: str, body: Mapping[str, object]) -> int:
+        """Journal one live-survey event (:data:`EVENT_KINDS`) with its JSON body; returns its number."""
+        return self.add_events(t_unix_s, [(kind, body)])[0]
+
+    def add_events(self, t_unix_s: float, events: list[tuple[str, Mapping[str, object]]]) -> list[int]:
+        """Journal several events of one time in one transaction; returns their numbers."""
+        rows = []
+        for kind, body in events:
+            if kind not in EVENT_KINDS:
+                raise DataError(f"event kind {kind!r} is not one of {', '.join(EVENT_KINDS)}")
+            rows.append(
+                (float(t_unix_s), kind, json.dumps(to_jsonable(body), allow_nan=False, separators=(",", ":")))
+            )
+        seqs = []
+        try:
+            with self._db:
+                self._db.execute("BEGIN IMMEDIATE")
+                for row in rows:
+                    seqs.append(
+                        int(
+                            self._db.execute(
+                                "INSERT INTO events (t, kind, body) VALUES (?, ?, ?)", row
+                            ).lastrowid
+                        )
+                    )
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot write to the journal")) from None
+        return seqs
+
+    def events(self, kind: str | None = None, *, after_seq: int = 0) -> list[JournalEvent]:
+        """Journaled events in order, of one kind or all, numbered above ``after_seq``."""
+        if not self._has_table("events"):
+            return []
+        where, params = "seq > ?", (int(after_seq),)
+        if kind is not None:
+            where, params = "seq > ? AND kind = ?", (int(after_seq), kind)
+        rows = self._query(f"SELECT seq, t, kind, body FROM events WHERE {where} ORDER BY seq", params)
+        return [
+            JournalEvent(seq=int(q), t_unix_s=float(t), kind=k, body=json.loads(b)) for q, t, k, b in rows
+        ]
+
+    def last_event(self, kind: str) -> JournalEvent | None:
+        """The latest event of that kind, if any."""
+        if not self._has_table("events"):
+            return None
+        rows = self._query(
+            "SELECT seq, t, kind, body FROM events WHERE kind = ? ORDER BY seq DESC LIMIT 1", (kind,)
+        )
+        return (
+            JournalEvent(
+                seq=int(rows[0][0]), t_unix_s=float(rows[0][1]), kind=rows[0][2], body=json.loads(rows[0][3])
+            )
+            if rows
+            else None
+        )
+
+    def _has_table(self, name: str) -> bool:
+        return bool(self._query("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,)))
 
     def add_heading(self, t_unix_s: float, seq: int, heading_deg: float) -> bool:
         """Append one true heading (degrees clockwise from north) in its own transaction.

@@ -54,7 +54,9 @@ USE_POSITION_TYPE_MASK = 0x0DFC
 MAX_SPEED_MPS = 25.0
 """Fixes implying a faster move from the previous fix (beyond 10 m of noise) are gross outliers."""
 
-Status = Literal["accepted", "rejected", "timeout", "link_lost", "not_in_mode", "unconfirmed", "connected"]
+Status = Literal[
+    "accepted", "rejected", "timeout", "link_lost", "not_in_mode", "unconfirmed", "connected", "sent"
+]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -538,6 +540,37 @@ class MavlinkVehicle:
             message=f"goto {lat_deg:.7f}, {lon_deg:.7f} sent; the vehicle did not echo the target",
             command=mavlink.MAVLINK_MSG_ID_SET_POSITION_TARGET_GLOBAL_INT,
         )
+
+    def send_goto(self, lat_deg: float, lon_deg: float) -> CommandResult:
+        """Send a GUIDED position target once and return at once (``sent``), for a loop that re-targets
+        the vehicle at every range and must not wait for the echo; :meth:`target_echoed` tells later
+        whether the vehicle took it. Outside GUIDED it is ``not_in_mode`` and nothing is sent."""
+        if not (math.isfinite(lat_deg) and math.isfinite(lon_deg) and -90 <= lat_deg <= 90):
+            raise ConfigError(f"goto target {lat_deg}, {lon_deg}: latitude or longitude out of range")
+        st = self.require_mode("GUIDED")
+        if not st.ok:
+            return st
+        lat_i, lon_i = round(lat_deg * 1e7), round(lon_deg * 1e7)
+        self._send(
+            "SET_POSITION_TARGET_GLOBAL_INT",
+            lambda mav, sys_, comp: mav.set_position_target_global_int_send(
+                0, sys_, comp, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, USE_POSITION_TYPE_MASK,
+                lat_i, lon_i, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            ),
+        )  # fmt: skip
+        return CommandResult(
+            status="sent",
+            message=f"goto {lat_deg:.7f}, {lon_deg:.7f} sent",
+            command=mavlink.MAVLINK_MSG_ID_SET_POSITION_TARGET_GLOBAL_INT,
+        )
+
+    def target_echoed(self, lat_deg: float, lon_deg: float) -> bool:
+        """Whether the vehicle's latest POSITION_TARGET_GLOBAL_INT is that point (to 1e-7 deg)."""
+        with self._state_lock:
+            echo = self._position_target
+        return echo is not None and abs(echo[0] - round(lat_deg * 1e7)) <= 1 and abs(
+            echo[1] - round(lon_deg * 1e7)
+        ) <= 1
 
     # -- missions ---------------------------------------------------------------------------------
 

@@ -12,9 +12,10 @@ from the master side and answers as a beacon does (Developer Guide, section 8.1)
   for MSG_REQU/MSG_REQX, the USBL azimuth and elevation and the relative position; or, for a
   dropout or a beacon id with no transponder, a ``CID_PING_ERROR`` with ``CST_XCVR_RESP_TIMEOUT``
   after the range timeout.
-- The range is the distance from the vehicle's true position (a callable of time you pass in, ENU
-  metres) at the ping to the hidden transponder, plus Gaussian noise; with probability
-  ``p_multipath`` it is longer by a uniform draw in ``multipath_extra_m`` (a reflected path).
+- The range is half the two-way path from the vehicle's true position (a callable of time you pass in,
+  ENU metres) at the ping, to the hidden transponder, and back to the vehicle's position when the reply
+  arrives (a moving vehicle; the client stamps the range at the middle of the two), plus Gaussian noise;
+  with probability ``p_multipath`` it is longer by a uniform draw in ``multipath_extra_m`` (a reflected path).
 - Malformed commands get no answer (as the beacon's command processor drops them) and are counted.
 
 Geometry conventions of the simulated USBL head (aligned with north, level, yaw 0): azimuth degrees
@@ -27,6 +28,7 @@ All draws come from the one seeded ``np.random.Generator`` given, in the order t
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import heapq
 import math
 import os
@@ -212,7 +214,7 @@ class SeatracBeaconSimulator:
 
     # ------------------------------------------------------------------------------------------ the loop
 
-    def _schedule(self, due: float, frame: bytes) -> None:
+    def _schedule(self, due: float, frame: bytes | Callable[[], bytes]) -> None:
         heapq.heappush(self._queue, (due, self._seq, frame))
         self._seq += 1
 
@@ -223,7 +225,7 @@ class SeatracBeaconSimulator:
                 now = time.monotonic()
                 while self._queue and self._queue[0][0] <= now:
                     _, _, frame = heapq.heappop(self._queue)
-                    os.write(self._master, frame)
+                    os.write(self._master, frame() if callable(frame) else frame)
                 wait = 0.01 if not self._queue else min(0.01, max(0.0, self._queue[0][0] - now))
                 ready, _, _ = select.select([self._master], [], [], wait)
                 if not ready:
@@ -280,20 +282,26 @@ class SeatracBeaconSimulator:
                 SimulatedPing(t_mono_s=now, beacon=cmd.beacon_id, outcome="dropout", true_range_m=true_range)
             )
             return
-        measured = max(0.0, true_range + noise + (extra if multipath else 0.0))
-        delay = cfg.time_scale * (2.0 * measured / cfg.sound_speed_mps + cfg.turnaround_s)
+        delay = cfg.time_scale * (2.0 * true_range / cfg.sound_speed_mps + cfg.turnaround_s)
         self._busy_until = now + delay
-        fix = self._fix(cmd.beacon_id, cmd.msg_type, vehicle, np.asarray(target, float), measured)
-        self._schedule(self._busy_until, encode_ping_resp(fix))
+        index = len(self.pings)
         self.pings.append(
-            SimulatedPing(
-                t_mono_s=now,
-                beacon=cmd.beacon_id,
-                outcome="multipath" if multipath else "ok",
-                true_range_m=true_range,
-                reported_range_m=measured,
-            )
+            SimulatedPing(t_mono_s=now, beacon=cmd.beacon_id, outcome="multipath" if multipath else "ok")
         )
+        send_position, beacon_id, msg_type = vehicle, cmd.beacon_id, cmd.msg_type
+
+        def reply() -> bytes:
+            # The two-way path: out from the head where it was at the send, back to where it is now.
+            back = np.asarray(self.vehicle_position(time.monotonic()), dtype=float)
+            tgt = np.asarray(target, float)
+            two_way = 0.5 * float(np.linalg.norm(tgt - send_position) + np.linalg.norm(tgt - back))
+            measured = max(0.0, two_way + noise + (extra if multipath else 0.0))
+            self.pings[index] = dataclasses.replace(
+                self.pings[index], true_range_m=two_way, reported_range_m=measured
+            )
+            return encode_ping_resp(self._fix(beacon_id, msg_type, back, tgt, measured))
+
+        self._schedule(self._busy_until, reply)
 
     def _fix(
         self, beacon: int, msg_type: int, vehicle: np.ndarray, target: np.ndarray, range_m: float
