@@ -63,7 +63,9 @@ def gga(t: dt.datetime, lat: float, lon: float, h: float) -> str:
 class NmeaFeeder(threading.Thread):
     """Writes the boat's true position (GGA), heading (HDT) and date (ZDA) into gpsd's pty, 10 Hz wall."""
 
-    def __init__(self, fd: int, boat: BoatSimulator, proj: LocalProjection, noise_m: float, seed: int) -> None:
+    def __init__(
+        self, fd: int, boat: BoatSimulator, proj: LocalProjection, noise_m: float, seed: int
+    ) -> None:
         super().__init__(daemon=True, name="nmea-feeder")
         self.fd, self.boat, self.proj = fd, boat, proj
         self.noise_m = noise_m
@@ -206,11 +208,24 @@ def oceanloc(*args: str) -> list[str]:
     return [sys.executable, "-m", "oceanloc", *args]
 
 
-def start_survey(path: Path, *extra: str) -> None:
-    """``oceanloc survey start`` for the rig: greedy planner, 0.15 m range sigma (white GPS error)."""
-    cmd = oceanloc("survey", "start", str(path), "--planner", "greedy", "--max-distance", "40",
-                   "--sigma-range", "0.15", "--sigma-gps", "0", "--prior-sigma", "300,300,60",
-                   "--prior-depth", "50", "--max-gap", "1", *extra)  # fmt: skip
+def drop_options(drops_enu_m: dict[int, tuple[float, float, float]]) -> list[str]:
+    """``--drop B:LAT,LON,DEPTH`` for drop positions given as east, north (m about the start) and depth."""
+    proj = LocalProjection(lat0_deg=LAT0, lon0_deg=LON0)
+    out = []
+    for b, (e, n, depth) in drops_enu_m.items():
+        lon, lat = proj.to_lonlat(e, n)
+        out += ["--drop", f"{b}:{float(lat):.8f},{float(lon):.8f},{depth:g}"]
+    return out
+
+
+def start_survey(path: Path, drops_enu_m: dict[int, tuple[float, float, float]], *extra: str) -> None:
+    """``oceanloc survey start`` for the rig: the look-ahead planner (k = 3) with the boat's speed and turn
+    rate in journal seconds (``time_scale`` times the simulated ones), 0.15 m range sigma (white GPS
+    error), the crew's drop positions as the prior means within 30 m (15 m in depth)."""
+    cmd = oceanloc("survey", "start", str(path), "--planner", "lookahead", "-k", "3", "--speed", "50",
+                   "--period", "3", "--max-yaw-rate", "200", "--sigma-range", "0.15", "--sigma-gps", "0",
+                   "--prior-sigma", "30,30,15", "--max-gap", "1", *drop_options(drops_enu_m),
+                   *extra)  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)
 
 

@@ -72,6 +72,14 @@ def start(
         float, typer.Option(help="Sound speed for travel-time range files, m/s.")
     ] = 1500.0,
     max_gap: Annotated[float, typer.Option(help="Largest GPS gap to interpolate a range across, s.")] = 2.0,
+    drop: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--drop",
+            help="A beacon's drop position BEACON:LAT,LON,DEPTH (deg, deg, m below the antenna; repeat): its "
+            "prior mean, with --prior-sigma.",
+        ),
+    ] = None,
     sigma_gps: Annotated[
         float | None,
         typer.Option(help="GPS part of the range sigma, m (default 1 m when the sigma is above it, else 0)."),
@@ -91,6 +99,7 @@ def start(
         beacons=tuple(beacon or ()),
         prior_sigma_enu_m=parse_fields(prior_sigma, ("E", "N", "U"), "--prior-sigma"),  # type: ignore[arg-type]
         prior_depth_m=prior_depth,
+        drops=tuple(_parse_drop(text) for text in drop or []),
         heading_deg=heading,
         sound_speed_mps=sound_speed,
         max_gap_s=max_gap,
@@ -246,6 +255,22 @@ def _parse_fix(text: str) -> tuple[float, float, float, float]:
     if problem := fix_problem(*values):
         raise ConfigError(f"{where}: {problem}; nothing was added")
     return values
+
+
+def _parse_drop(text: str) -> tuple[int, float, float, float]:
+    """``--drop BEACON:LAT,LON,DEPTH``."""
+    where = f"--drop {text!r}"
+    head, sep, rest = text.partition(":")
+    try:
+        beacon = int(head)
+    except ValueError:
+        raise ConfigError(f"{where}: expected BEACON:LAT,LON,DEPTH with an integer beacon id") from None
+    parts = rest.split(",")
+    if not sep or len(parts) != 3:
+        raise ConfigError(f"{where}: expected BEACON:LAT,LON,DEPTH (deg, deg, m)")
+    lat = parse_number(parts[0], "LAT", where, -90.0, 90.0)
+    lon = parse_number(parts[1], "LON", where, -180.0, 360.0)
+    return beacon, lat, lon, parse_number(parts[2], "DEPTH", where, 0.0, 12_000.0)
 
 
 def _parse_range(text: str) -> tuple[float, int, float]:

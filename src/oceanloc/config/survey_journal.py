@@ -46,6 +46,10 @@ class JournalSettings:
         Prior 1-sigma per axis around the point below the shortest range, metres.
     prior_depth_m : float
         Prior depth below the antenna's median height, metres.
+    drops : tuple of (beacon, lat_deg, lon_deg, depth_m)
+        Known drop positions: the prior mean of those beacons (``depth_m`` below the antenna's median
+        height), with the spread ``prior_sigma_enu_m``; the others get the point below their shortest
+        range.
     heading_deg : float or None
         Vehicle true heading at the start (degrees clockwise from north), used until the journal holds
         an HDT heading or two distinct fixes.
@@ -70,6 +74,7 @@ class JournalSettings:
     beacons: tuple[int, ...] = ()
     prior_sigma_enu_m: tuple[float, float, float] = (100.0, 100.0, 10.0)
     prior_depth_m: float = 2.0
+    drops: tuple[tuple[int, float, float, float], ...] = ()
     heading_deg: float | None = None
     sound_speed_mps: float = 1500.0
     max_gap_s: float = 2.0
@@ -101,6 +106,19 @@ class JournalSettings:
             raise ConfigError(
                 f"survey setting prior_sigma_enu_m needs 3 positive values, got {self.prior_sigma_enu_m}"
             )
+        for drop in self.drops:
+            b, lat, lon, depth = drop
+            if self.beacons and b not in self.beacons:
+                raise ConfigError(f"survey setting drops: beacon {b} is not one of the survey's beacons")
+            if not (
+                -90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0 and math.isfinite(depth) and depth >= 0.0
+            ):
+                raise ConfigError(
+                    f"survey setting drops: beacon {b} at {lat}, {lon}, depth {depth}: latitude in "
+                    "[-90, 90], longitude in [-180, 360] and depth >= 0 m required"
+                )
+        if len({d[0] for d in self.drops}) != len(self.drops):
+            raise ConfigError("survey setting drops: one drop position per beacon")
         if not (math.isfinite(self.prior_depth_m) and self.prior_depth_m >= 0.0):
             raise ConfigError(f"survey setting prior_depth_m must be >= 0, got {self.prior_depth_m}")
         if self.heading_deg is not None and not (
@@ -136,6 +154,7 @@ class JournalSettings:
             "beacons": list(self.beacons),
             "prior_sigma_enu_m": list(self.prior_sigma_enu_m),
             "prior_depth_m": self.prior_depth_m,
+            "drops": [list(d) for d in self.drops],
             "heading_deg": self.heading_deg,
             "sound_speed_mps": self.sound_speed_mps,
             "max_gap_s": self.max_gap_s,
@@ -177,6 +196,10 @@ class JournalSettings:
                 beacons=tuple(int(b) for b in get("beacons")),
                 prior_sigma_enu_m=tuple(float(s) for s in get("prior_sigma_enu_m")),  # type: ignore[arg-type]
                 prior_depth_m=float(get("prior_depth_m")),
+                drops=tuple(
+                    (int(d[0]), float(d[1]), float(d[2]), float(d[3]))
+                    for d in (json.loads(meta["drops"]) if "drops" in meta else [])
+                ),
                 heading_deg=None if get("heading_deg") is None else float(get("heading_deg")),
                 sound_speed_mps=float(get("sound_speed_mps")),
                 max_gap_s=float(get("max_gap_s")),

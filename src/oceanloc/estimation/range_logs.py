@@ -16,6 +16,7 @@ factor), its covariance consistent; outliers are still found under the white mod
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,6 +109,22 @@ class CorrelatedRangeProblem:
         return w_resid[None, :], w_jac[None, :, :]
 
 
+def prior_mean(
+    beacon: int,
+    sensors_m: FloatArray,
+    ranges_m: FloatArray,
+    surface_m: float,
+    prior_depth_m: float,
+    known_enu_m: Mapping[int, FloatArray] | None = None,
+) -> FloatArray:
+    """A beacon's prior mean (3,), metres: its known drop position if given, else the point
+    ``prior_depth_m`` below the surface ``surface_m`` under the sensor of the shortest range."""
+    if known_enu_m is not None and beacon in known_enu_m:
+        return np.asarray(known_enu_m[beacon], dtype=float).reshape(3).copy()
+    i0 = int(np.argmin(ranges_m))
+    return np.array([sensors_m[i0, 0], sensors_m[i0, 1], surface_m - prior_depth_m])
+
+
 MIN_BEACON_RANGES = 4
 """Ranges a beacon needs to be localized (three position coordinates, one redundancy)."""
 
@@ -129,6 +146,7 @@ def localize_beacons(
     sigma_gps_m: float = 1.0,
     gps_correlation_s: float | None = 60.0,
     skip_short: bool = False,
+    prior_means_enu_m: Mapping[int, FloatArray] | None = None,
 ) -> list[BeaconEstimate]:
     """Localize every beacon in the log (see the module docstring).
 
@@ -148,6 +166,9 @@ def localize_beacons(
     skip_short : bool
         Leave out a beacon with fewer than :data:`MIN_BEACON_RANGES` ranges (else it is a
         :class:`DataError`); :func:`beacon_range_counts` says which.
+    prior_means_enu_m : mapping of beacon id to (3,) float, optional
+        Prior means (ENU metres) for the beacons whose drop position is known; the others get the point
+        below their shortest range (:func:`prior_mean`).
     """
     if gps_correlation_s is not None:
         if gps_correlation_s <= 0.0:
@@ -167,8 +188,7 @@ def localize_beacons(
             continue
         if z.size < MIN_BEACON_RANGES:
             raise DataError(f"beacon {beacon}: {z.size} ranges, need at least 4")
-        i0 = int(np.argmin(z))
-        mean = np.array([[sensors[i0, 0], sensors[i0, 1], surface - prior_depth_m]])
+        mean = prior_mean(int(beacon), sensors, z, surface, prior_depth_m, prior_means_enu_m)[None]
         prior = GaussianPrior(mean=mean, cov=np.diag(np.square(prior_sigma_enu_m)))
         opts = MapOptions(surface_z_m=surface)
         used = np.ones(z.size, dtype=bool)

@@ -509,8 +509,10 @@ class _Loop:
                 for pump, source in zip(self.pumps, ("position", "ranges"), strict=True):
                     dog = watchdog_heard(dog, source, pump.last_record_mono_s)
                 link = self.link()
-                if link is None or link.alive:
+                if link is None:
                     dog = watchdog_heard(dog, "vehicle", now)
+                elif math.isfinite(link.heartbeat_age_s):  # heard when the last heartbeat came
+                    dog = watchdog_heard(dog, "vehicle", now - link.heartbeat_age_s)
                 verdict = watchdog_check(dog, now, self.opt.watchdog)
                 dog = verdict.state
                 if verdict.action == "hold":
@@ -728,9 +730,7 @@ class _Loop:
         fence = self.survey_fence()
         if fence is not None:
             fix = self.last_fix
-            site = check_site(
-                fence, fix.lat_deg if fix else lat, fix.lon_deg if fix else lon, lat, lon
-            )
+            site = check_site(fence, fix.lat_deg if fix else lat, fix.lon_deg if fix else lon, lat, lon)
             if not site.ok:
                 self.hold(f"return point refused: {site.message}")
                 return CommandResult(status="rejected", message=site.message)

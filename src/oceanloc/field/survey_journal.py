@@ -34,7 +34,7 @@ from oceanloc.estimation.consistency import (
     confidence_ellipse,
     range_linearization_check,
 )
-from oceanloc.estimation.range_logs import localize_beacons
+from oceanloc.estimation.range_logs import localize_beacons, prior_mean
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.journal import AppendCounts, Journal, JournalRecords, append_gps_log, append_range_log
 from oceanloc.io.nmea import read_nmea
@@ -321,12 +321,15 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     seen = np.isin(aligned.beacon, ready)
     status[aligned.line[~seen]] = RANGE_STATUS.index("waiting")
     subset = _select(aligned, seen)
+    surface = float(np.median(subset.vehicle_enu_m[:, 2])) if subset.range_m.size else 0.0
+    drop_means = drop_means_enu_m(settings, origin, surface)
     found = (
         localize_beacons(
             subset,
             sigma_range_m=settings.sigma_range_m,
             prior_sigma_enu_m=settings.prior_sigma_enu_m,
             prior_depth_m=settings.prior_depth_m,
+            prior_means_enu_m=drop_means,
             sigma_gps_m=settings.gps_sigma_m,
             gps_correlation_s=settings.gps_correlation_s if settings.gps_sigma_m > 0.0 else None,
         )
@@ -339,7 +342,7 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     pos = np.array([e.position_enu_m for e in found]).reshape(-1, 3)
     cov = np.array([e.covariance_m2 for e in found]).reshape(-1, 3, 3)
     wait_ids = np.array(sorted(waiting), dtype=np.int64)
-    check = _linearization(subset, found, pos, cov, settings)
+    check = _linearization(subset, found, pos, cov, settings, drop_means)
     return SurveyEstimates(
         origin=origin,
         beacons=np.array([e.beacon for e in found], dtype=np.int64),
@@ -360,8 +363,23 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     )
 
 
+def drop_means_enu_m(settings: JournalSettings, origin: EnuOrigin, surface_m: float) -> dict[int, FloatArray]:
+    """The known drop positions as prior means in the survey's ENU frame, metres (``depth_m`` below the
+    antenna's median height ``surface_m``)."""
+    out = {}
+    for b, lat, lon, depth in settings.drops:
+        e, n, _ = geodetic_to_enu(lat, lon, origin.h_m, origin).reshape(3)
+        out[int(b)] = np.array([e, n, surface_m - depth])
+    return out
+
+
 def _linearization(
-    subset: AlignedRanges, found: Sequence, pos: FloatArray, cov: FloatArray, settings: JournalSettings
+    subset: AlignedRanges,
+    found: Sequence,
+    pos: FloatArray,
+    cov: FloatArray,
+    settings: JournalSettings,
+    drop_means: dict[int, FloatArray],
 ) -> LinearizationCheck:
     """The linearization check of every estimate, on its used ranges and the prior
     :func:`~oceanloc.estimation.range_logs.localize_beacons` put on it (below the shortest range,
@@ -376,8 +394,9 @@ def _linearization(
         sel = subset.select(e.beacon)
         m = e.used.size
         sensors[i, :m], ranges[i, :m], used[i, :m] = subset.vehicle_enu_m[sel], subset.range_m[sel], e.used
-        i0 = int(np.argmin(subset.range_m[sel]))
-        mean[i] = [sensors[i, i0, 0], sensors[i, i0, 1], surface - settings.prior_depth_m]
+        mean[i] = prior_mean(
+            e.beacon, sensors[i, :m], ranges[i, :m], surface, settings.prior_depth_m, drop_means
+        )
     return range_linearization_check(
         pos,
         cov,

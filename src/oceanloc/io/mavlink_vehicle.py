@@ -568,9 +568,11 @@ class MavlinkVehicle:
         """Whether the vehicle's latest POSITION_TARGET_GLOBAL_INT is that point (to 1e-7 deg)."""
         with self._state_lock:
             echo = self._position_target
-        return echo is not None and abs(echo[0] - round(lat_deg * 1e7)) <= 1 and abs(
-            echo[1] - round(lon_deg * 1e7)
-        ) <= 1
+        return (
+            echo is not None
+            and abs(echo[0] - round(lat_deg * 1e7)) <= 1
+            and abs(echo[1] - round(lon_deg * 1e7)) <= 1
+        )
 
     # -- missions ---------------------------------------------------------------------------------
 

@@ -179,6 +179,8 @@ class SeatracBeaconSimulator:
         self._queue: list[tuple[float, int, bytes]] = []
         self._seq = 0
         self.error: BaseException | None = None
+        self.silent = False
+        """While True the head answers nothing (a cable pulled, a modem powered off)."""
 
     def __enter__(self) -> SeatracBeaconSimulator:
         self.start()
@@ -245,6 +247,8 @@ class SeatracBeaconSimulator:
             self.error = exc
 
     def _handle(self, line: bytes) -> None:
+        if self.silent:
+            return
         try:
             frame = decode_frame(line, sync="#")
             if frame.cid != Cid.PING_SEND:
