@@ -641,6 +641,7 @@ class _Loop:
         if not site.ok:
             return None, site.message
         if self.opt.dry_run or self.vehicle is None:
+            self.sites += 1  # a rehearsal: the site budget counts the sites it would have sent
             return None, "dry run: nothing commanded"
         if link is None or not link.alive:
             return None, "vehicle link lost"

@@ -1,0 +1,73 @@
+"""The live survey's safety end to end on loopback (boat simulator, real gpsd, SeaTrac beacon simulator,
+``oceanloc survey run`` as a subprocess): cutting the MAVLink link or the ranges puts the boat in HOLD
+within the timeout; SIGTERM holds it and exits 0; a dry run plans and commands nothing."""
+
+from __future__ import annotations
+
+import math
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+from oceanloc.sim.boat import MODE_GUIDED, MODE_HOLD
+from tests.field._live_rig import NEEDS_GPSD, live_rig, run_command, start_survey, terminate
+from tests.field.test_live_survey_end_to_end import DROPS, TRANSPONDERS, _events, _wait_for
+
+
+@NEEDS_GPSD
+def test_cutting_the_vehicle_link_or_the_ranges_holds_the_boat(tmp_path: Path):
+    journal = tmp_path / "survey.db"
+    with live_rig(TRANSPONDERS) as rig:
+        start_survey(journal, DROPS)
+        cmd = run_command(rig, journal, "--max-time", "300", "--timeouts", "1,3,1", "--ping-interval", "0.1")
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            _wait_for(lambda: rig.boat.mode == MODE_GUIDED and len(_events(journal, "command")) >= 5, 60.0,
+                      "the boat in GUIDED under commands")  # fmt: skip
+            # the MAVLink link: the boat's own GCS failsafe holds it (FS_TIMEOUT 5 simulated s = 0.5 s)
+            rig.boat.cut_link(True)
+            t_cut = time.monotonic()
+            _wait_for(lambda: rig.boat.mode == MODE_HOLD, 3.0, "HOLD after the link cut")
+            held_after_s = time.monotonic() - t_cut
+            _wait_for(lambda: any("no vehicle" in e["message"] for e in _events(journal, "link")), 3.0,
+                      "the loop noticing the lost vehicle link")  # fmt: skip
+            rig.boat.cut_link(False)
+            _wait_for(lambda: rig.boat.mode == MODE_GUIDED, 10.0, "the survey resuming in GUIDED")
+            # the ranges: the beacons fall silent; the loop commands HOLD after its 3 s ranges timeout
+            rig.beacons.silent = True
+            t_mute = time.monotonic()
+            _wait_for(lambda: rig.boat.mode == MODE_HOLD, 3.0 + 2.0, "HOLD after the ranges stopped")
+            ranges_hold_s = time.monotonic() - t_mute
+            assert any("no ranges" in e["message"] for e in _events(journal, "link"))
+            rig.beacons.silent = False
+            _wait_for(lambda: rig.boat.mode == MODE_GUIDED, 10.0, "the survey resuming after the ranges")
+            # SIGTERM: HOLD, journal the stop, exit 0
+            rc = terminate(proc, signal.SIGTERM)
+            err = proc.stderr.read()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        assert rc == 0, err[-2000:]
+        assert rig.boat.mode == MODE_HOLD
+    assert "Traceback" not in err
+    assert held_after_s <= 1.5
+    assert 3.0 <= ranges_hold_s <= 3.0 + 1.5
+    (stop,) = _events(journal, "stop")
+    assert stop["status"] == "interrupted"
+
+
+@NEEDS_GPSD
+def test_a_dry_run_plans_and_commands_nothing(tmp_path: Path):
+    journal = tmp_path / "survey.db"
+    with live_rig(TRANSPONDERS) as rig:
+        start_survey(journal, DROPS)
+        cmd = run_command(rig, journal, "--dry-run", "--max-time", "4", "--ping-interval", "0.1")
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        assert rig.boat.mode == MODE_HOLD
+        assert not rig.boat.received.get("SET_POSITION_TARGET_GLOBAL_INT")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "dry run" in proc.stdout and " next " in proc.stdout
+    plans = _events(journal, "plan")
+    assert plans and all(math.isfinite(p["next"]["lat_deg"]) for p in plans)
+    assert {c["status"] for c in _events(journal, "command")} == {None}
