@@ -98,11 +98,113 @@ class NmeaFeeder(threading.Thread):
             self.stop.wait(0.1)
 
 
+SITL_ENV = "OCEANLOC_SITL"
+SITL_PARAMS = """FRAME_CLASS 2
+CRUISE_SPEED 5
+WP_RADIUS 3
+ARMING_REQUIRE 0
+ARMING_CHECK 0
+FS_GCS_ENABLE 1
+FS_ACTION 2
+FS_TIMEOUT 5
+SR1_POSITION 20
+SR1_EXTRA1 20
+"""
+
+
+@dataclass(frozen=True)
+class SitlTruth:
+    """What the rig needs of the boat's state, from SITL's second serial port."""
+
+    east_m: float
+    north_m: float
+    heading_deg: float
+    vel_enu_mps: tuple[float, float]
+
+
+class SitlBoat:
+    """ArduPilot SITL's ``motorboat`` as the rig's boat (``OCEANLOC_SITL`` names an ``ardurover`` binary).
+
+    oceanloc gets SITL's serial0 (``udpclient`` to the rig's vehicle port); the rig reads serial1 for the
+    boat's position (GLOBAL_POSITION_INT at 20 Hz, from SITL's simulated GPS and EKF), from which the
+    beacon simulator's ranges and gpsd's NMEA are made, and its mode (HEARTBEAT). SITL boots in MANUAL;
+    the rig, as the operator, switches it to HOLD once its EKF is ready, before the survey starts.
+    """
+
+    def __init__(self, binary: str, folder: Path, vehicle_port: int, time_scale: float) -> None:
+        from oceanloc.io._mavlink import mavutil
+
+        self.time_scale = time_scale
+        self.proj = LocalProjection(lat0_deg=LAT0, lon0_deg=LON0)
+        truth_port = free_port()
+        params = folder / "oceanloc-boat.parm"
+        params.write_text(SITL_PARAMS)
+        self._log = (folder / "sitl.log").open("w")
+        self.proc = subprocess.Popen(
+            [binary, "-w", "--model", "motorboat", "--speedup", f"{time_scale:g}", "--home",
+             f"{LAT0},{LON0},0,0", "--defaults", str(params),
+             "--serial0", f"udpclient:{LOOPBACK}:{vehicle_port}",
+             "--serial1", f"udpclient:{LOOPBACK}:{truth_port}"],
+            cwd=folder, stdout=self._log, stderr=subprocess.STDOUT,
+        )  # fmt: skip
+        self.conn = mavutil.mavlink_connection(f"udpin:{LOOPBACK}:{truth_port}", dialect="ardupilotmega")
+        self._truth = SitlTruth(east_m=0.0, north_m=0.0, heading_deg=0.0, vel_enu_mps=(0.0, 0.0))
+        self._mode = -1
+        self._have_fix = threading.Event()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True, name="sitl-truth")
+        self._thread.start()
+        self.received: dict[str, int] = {}
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            msg = self.conn.recv_match(type=["GLOBAL_POSITION_INT", "HEARTBEAT"], blocking=True, timeout=0.2)
+            if msg is None:
+                continue
+            if msg.get_type() == "HEARTBEAT" and msg.get_srcComponent() == 1:
+                self._mode = int(msg.custom_mode)
+            elif msg.get_type() == "GLOBAL_POSITION_INT":
+                e, n = self.proj.to_local(msg.lon / 1e7, msg.lat / 1e7)
+                hdg = msg.hdg / 100.0 if msg.hdg != 65535 else self._truth.heading_deg
+                self._truth = SitlTruth(east_m=float(e), north_m=float(n), heading_deg=hdg,
+                                        vel_enu_mps=(msg.vy / 100.0, msg.vx / 100.0))  # fmt: skip
+                self._have_fix.set()
+
+    def ready(self, timeout_s: float = 90.0) -> None:
+        """Wait for SITL's position, then put it in HOLD (asked until its EKF accepts)."""
+        if not self._have_fix.wait(timeout_s):
+            pytest.fail("SITL gave no position (see sitl.log)")
+        deadline = time.monotonic() + timeout_s
+        while self._mode != 4 and time.monotonic() < deadline:
+            self.conn.set_mode(4)
+            time.sleep(1.0)
+        if self._mode != 4:
+            pytest.fail("SITL did not take HOLD (see sitl.log)")
+
+    def truth(self) -> SitlTruth:
+        return self._truth
+
+    @property
+    def mode(self) -> int:
+        return self._mode
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(2.0)
+        self.conn.close()
+        self.proc.terminate()
+        try:
+            self.proc.wait(5.0)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+        self._log.close()
+
+
 @dataclass
 class Rig:
     """The running simulators and the specs oceanloc connects to."""
 
-    boat: BoatSimulator
+    boat: BoatSimulator | SitlBoat
     beacons: SeatracBeaconSimulator
     proj: LocalProjection
     vehicle_spec: str
@@ -128,14 +230,24 @@ def live_rig(
     seed: int = 0,
     gpsd: bool = True,
     fs_gcs: bool = True,
+    sitl_folder: Path | None = None,
+    cruise_speed_mps: float = 2.0,
 ):
-    """Boat + gpsd (or the vehicle's telemetry when ``gpsd`` is False) + beacons, torn down on exit."""
+    """Boat + gpsd (or the vehicle's telemetry when ``gpsd`` is False) + beacons, torn down on exit.
+
+    With ``sitl_folder`` the boat is ArduPilot SITL (:class:`SitlBoat`, binary from ``OCEANLOC_SITL``)."""
     vport = free_port()
-    params = BoatParams()  # ArduPilot motorboat defaults: 5 m/s cruise, 3 m waypoint radius
-    boat = BoatSimulator(
-        f"udpout:{LOOPBACK}:{vport}", start_lat_deg=LAT0, start_lon_deg=LON0, params=params,
-        time_scale=time_scale, fs_gcs_enable=fs_gcs, fs_timeout_s=5.0, seed=seed,
-    )  # fmt: skip
+    # a BlueBoat-like survey speed of 2 m/s (ArduPilot's motorboat default is 5 m/s; at ten times real
+    # time a slower boat keeps the host's timing jitter, times the wall-clock speed, small), 3 m radius
+    params = BoatParams(cruise_speed_mps=cruise_speed_mps)
+    boat: BoatSimulator | SitlBoat
+    if sitl_folder is not None:
+        boat = SitlBoat(os.environ[SITL_ENV], sitl_folder, vport, time_scale)
+    else:
+        boat = BoatSimulator(
+            f"udpout:{LOOPBACK}:{vport}", start_lat_deg=LAT0, start_lon_deg=LON0, params=params,
+            time_scale=time_scale, fs_gcs_enable=fs_gcs, fs_timeout_s=5.0, seed=seed,
+        )  # fmt: skip
     proj = LocalProjection(lat0_deg=LAT0, lon0_deg=LON0)
     cfg = BeaconSimConfig(
         transponders_enu_m=transponders_enu_m, sigma_range_m=sigma_range_m, time_scale=1.0 / time_scale,
@@ -149,8 +261,12 @@ def live_rig(
     sim = SeatracBeaconSimulator(cfg, head, np.random.default_rng(seed + 1))
     stack = contextlib.ExitStack()
     try:
-        boat.start()
-        stack.callback(boat.stop)
+        if isinstance(boat, SitlBoat):
+            stack.callback(boat.stop)
+            boat.ready()
+        else:
+            boat.start()
+            stack.callback(boat.stop)
         port = sim.start()
         stack.callback(sim.stop)
         beacon_ids = ",".join(str(b) for b in sorted(transponders_enu_m))
@@ -220,11 +336,12 @@ def drop_options(drops_enu_m: dict[int, tuple[float, float, float]]) -> list[str
 
 def start_survey(path: Path, drops_enu_m: dict[int, tuple[float, float, float]], *extra: str) -> None:
     """``oceanloc survey start`` for the rig: the look-ahead planner (k = 3) with the boat's speed and turn
-    rate in journal seconds (``time_scale`` times the simulated ones), 0.15 m range sigma (white GPS
-    error), the crew's drop positions as the prior means within 30 m (15 m in depth)."""
-    cmd = oceanloc("survey", "start", str(path), "--planner", "lookahead", "-k", "3", "--speed", "50",
-                   "--period", "3", "--max-yaw-rate", "200", "--sigma-range", "0.15", "--sigma-gps", "0",
-                   "--prior-sigma", "30,30,15", "--max-gap", "1", *drop_options(drops_enu_m),
+    rate in journal seconds (ten times the simulated ones), 0.3 m range sigma (the simulator's 0.1 m
+    plus the host's timing jitter times the boat's 20 m per wall-clock second; white GPS error), the
+    crew's drop positions as the prior means within 20 m (10 m in depth)."""
+    cmd = oceanloc("survey", "start", str(path), "--planner", "lookahead", "-k", "3", "--speed", "20",
+                   "--period", "3", "--max-yaw-rate", "200", "--sigma-range", "0.3", "--sigma-gps", "0",
+                   "--prior-sigma", "20,20,10", "--max-gap", "1", *drop_options(drops_enu_m),
                    *extra)  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)
 

@@ -12,6 +12,7 @@ same boat. The safety tests (link loss, SIGTERM, dry run) are in test_live_surve
 from __future__ import annotations
 
 import json
+import os
 import signal
 import sqlite3
 import subprocess
@@ -31,6 +32,7 @@ from tests.field._live_rig import (
     LAT0,
     LON0,
     NEEDS_GPSD,
+    SITL_ENV,
     circle_waypoints,
     interpolate_track,
     lawnmower_waypoints,
@@ -40,12 +42,12 @@ from tests.field._live_rig import (
     start_survey,
 )
 
-TRANSPONDERS = {1: (120.0, 80.0, -60.0), 2: (-90.0, 150.0, -40.0)}
-DROPS = {1: (135.0, 68.0, 55.0), 2: (-100.0, 168.0, 45.0)}  # where the crew dropped them: 20 m off, depth 5 m
-SIGMA_RANGE_M = 0.15  # the survey's range sigma (the simulator's noise is 0.1 m: a cautious crew)
-PRIOR_SIGMA_M = np.array([30.0, 30.0, 15.0])
-FENCE_RADIUS_M = 300.0
-RUN = ("--goal", "0.5", "--max-time", "120", "--fence-radius", str(FENCE_RADIUS_M), "--max-leg", "60",
+TRANSPONDERS = {1: (60.0, 40.0, -40.0), 2: (-45.0, 75.0, -30.0)}
+DROPS = {1: (75.0, 28.0, 36.0), 2: (-60.0, 88.0, 34.0)}  # where the crew dropped them: 20 m off, depth 4 m
+SIGMA_RANGE_M = 0.3  # the survey's range sigma (see tests/field/_live_rig.py: start_survey)
+PRIOR_SIGMA_M = np.array([20.0, 20.0, 10.0])
+FENCE_RADIUS_M = 150.0
+RUN = ("--goal", "0.8", "--max-time", "120", "--fence-radius", str(FENCE_RADIUS_M), "--max-leg", "40",
        "--timeouts", "1,3,1", "--ping-interval", "0.1")  # fmt: skip
 
 
@@ -144,36 +146,52 @@ def _fly_pattern(waypoints, n_ranges: int) -> float:
 
 
 @NEEDS_GPSD
-def test_planned_survey_stops_by_its_rule_and_survives_kill_9(tmp_path: Path):
+@pytest.mark.parametrize(
+    "boat",
+    [
+        "simulator",
+        pytest.param("sitl", marks=pytest.mark.skipif(
+            not os.environ.get(SITL_ENV), reason=f"set {SITL_ENV} to an ArduPilot ardurover SITL binary")),
+    ],
+)  # fmt: skip
+def test_planned_survey_stops_by_its_rule_and_survives_kill_9(tmp_path: Path, boat: str):
+    """With ``OCEANLOC_SITL`` set, the same test runs with ArduPilot's SITL motorboat as the boat."""
     journal = tmp_path / "survey.db"
     lines = tmp_path / "epochs.jsonl"
-    with live_rig(TRANSPONDERS) as rig:
+    with live_rig(TRANSPONDERS, sitl_folder=tmp_path if boat == "sitl" else None) as rig:
         start_survey(journal, DROPS)
         cmd = run_command(rig, journal, *RUN, "--json-lines", str(lines))
         first = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         try:
-            _wait_for(lambda: len(_events(journal, "command")) >= 15, 60.0, "15 commands of the first run")
-            # `survey status` works on a journal that is being written
-            status = subprocess.run(
-                [sys.executable, "-m", "oceanloc", "survey", "status", str(journal)],
-                capture_output=True, text=True, timeout=60,
-            )  # fmt: skip
-            assert status.returncode == 0 and "Beacons, ENU" in status.stdout, status.stderr
+            _wait_for(lambda: len(_events(journal, "command")) >= 8, 60.0, "8 commands of the first run")
         finally:
             first.kill()  # kill -9: no chance to flush, hold or journal a stop
             first.wait(10)
         assert first.returncode == -signal.SIGKILL
         committed = {t: set(_rows(journal, t)) for t in ("fixes", "ranges", "headings", "usbl", "events")}
         assert not _events(journal, "stop")
-        second = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert second.returncode == 0, second.stderr[-2000:]
-    assert "Traceback" not in second.stderr
+        n_before = len(_events(journal, "command"))
+        second = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            _wait_for(lambda: len(_events(journal, "command")) >= n_before + 3, 60.0, "the resumed run")
+            # `survey status` works on a journal that is being written
+            status = subprocess.run(
+                [sys.executable, "-m", "oceanloc", "survey", "status", str(journal)],
+                capture_output=True, text=True, timeout=60,
+            )  # fmt: skip
+            _out, err = second.communicate(timeout=120)
+        finally:
+            if second.poll() is None:
+                second.kill()
+    assert status.returncode == 0 and "Beacons, ENU" in status.stdout, status.stderr
+    assert second.returncode == 0, err[-2000:]
+    assert "Traceback" not in err
     # nothing committed was lost
     for table, rows in committed.items():
         assert rows <= set(_rows(journal, table)), table
     starts = _events(journal, "start")
     assert [s["resumed"] for s in starts] == [False, True]
-    assert "resuming the survey" in second.stderr
+    assert "resuming the survey" in err
     # stopped by its rule, every transponder within its reported 3 sigma
     (stop,) = _events(journal, "stop")
     assert stop["status"] == "goal", stop["message"]
@@ -185,12 +203,12 @@ def test_planned_survey_stops_by_its_rule_and_survives_kill_9(tmp_path: Path):
         error = np.array(e["enu_m"]) - truth[e["beacon"]]
         print(f"beacon {e['beacon']}: error {np.round(error, 3)} m, sigma {np.round(e['sigma_enu_m'], 3)} m")
         assert np.all(np.abs(error) <= 3.0 * np.array(e["sigma_enu_m"])), (e["beacon"], error)
-        assert e["ellipse95_semi_major_m"] <= 0.5 and e["ellipse_trusted"]
+        assert e["ellipse95_semi_major_m"] <= 0.8 and e["ellipse_trusted"]
     # no commanded site left the geofence (a radius about the first fix)
     fence = fence_from_radius(origin.lat_deg, origin.lon_deg, FENCE_RADIUS_M)
     sites = [p["site"] for p in _events(journal, "plan") if p["site"]["status"] != "refused"]
     assert sites and all(bool(contains(fence, s["lat_deg"], s["lon_deg"])) for s in sites)
-    assert all(s["leg_m"] <= 60.0 + 1e-6 for s in sites)
+    assert all(s["leg_m"] <= 40.0 + 1e-6 for s in sites)
     # the status lines: one JSON object per epoch, with estimates, next site, gain and link states
     epochs = [json.loads(x) for x in lines.read_text().splitlines() if '"epoch"' in x]
     assert epochs and {"beacons", "next", "links", "latency_ms"} <= set(epochs[-1])
@@ -201,11 +219,11 @@ def test_on_the_same_time_the_planned_survey_beats_a_circle_and_a_lawnmower(tmp_
     """The time budget is counted in ping cycles (one range every 0.1 s of wall time plus its flight): the
     simulators' cadence on a loaded machine varies from run to run, the number of pings does not. The
     patterns are laid out from the drop positions, as a crew would: a circle about their centre through
-    both, and a lawnmower over the square around them (60 m lines)."""
+    both, and a lawnmower over the square around them (28 m between lines)."""
     journal = tmp_path / "survey.db"
     with live_rig(TRANSPONDERS) as rig:
         start_survey(journal, DROPS)
-        cmd = run_command(rig, journal, "--max-time", "8", "--ping-interval", "0.1")  # 80 simulated s
+        cmd = run_command(rig, journal, "--max-time", "12", "--ping-interval", "0.1")  # 120 simulated s
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr[-2000:]
     n = len(_rows(journal, "ranges"))
@@ -214,6 +232,6 @@ def test_on_the_same_time_the_planned_survey_beats_a_circle_and_a_lawnmower(tmp_
     drops = np.array([d[:2] for d in DROPS.values()])
     centre, radius = drops.mean(axis=0), 0.5 * float(np.linalg.norm(drops[0] - drops[1]))
     circle = _fly_pattern(circle_waypoints(rig.proj, centre, radius), n)
-    mower = _fly_pattern(lawnmower_waypoints(rig.proj, centre, 150.0, 60.0), n)
+    mower = _fly_pattern(lawnmower_waypoints(rig.proj, centre, 70.0, 28.0), n)
     print(f"log det over {n} ranges: planned {planned:.2f}, circle {circle:.2f}, lawnmower {mower:.2f}")
     assert planned > circle and planned > mower

@@ -39,7 +39,8 @@ def test_cutting_the_vehicle_link_or_the_ranges_holds_the_boat(tmp_path: Path):
             t_mute = time.monotonic()
             _wait_for(lambda: rig.boat.mode == MODE_HOLD, 3.0 + 2.0, "HOLD after the ranges stopped")
             ranges_hold_s = time.monotonic() - t_mute
-            assert any("no ranges" in e["message"] for e in _events(journal, "link"))
+            _wait_for(lambda: any("no ranges" in e["message"] for e in _events(journal, "link")), 3.0,
+                      "the HOLD for the silent ranges journaled")  # fmt: skip
             rig.beacons.silent = False
             _wait_for(lambda: rig.boat.mode == MODE_GUIDED, 10.0, "the survey resuming after the ranges")
             # SIGTERM: HOLD, journal the stop, exit 0
@@ -52,7 +53,8 @@ def test_cutting_the_vehicle_link_or_the_ranges_holds_the_boat(tmp_path: Path):
         assert rig.boat.mode == MODE_HOLD
     assert "Traceback" not in err
     assert held_after_s <= 1.5
-    assert 3.0 <= ranges_hold_s <= 3.0 + 1.5
+    # 3 s after the last range, which came up to a ping cycle (about 0.15 s) before the beacons fell silent
+    assert 3.0 - 0.5 <= ranges_hold_s <= 3.0 + 1.5
     (stop,) = _events(journal, "stop")
     assert stop["status"] == "interrupted"
 

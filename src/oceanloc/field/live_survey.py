@@ -607,8 +607,8 @@ class _Loop:
         if stop.done:
             self.report(rec, est, None, None, None, arrival, links, stop)
             return self.finish(stop.status or "goal", stop.reason)
-        if est is None or est.n_beacons == 0 or self.last_fix is None:
-            note = "no beacon estimated yet" if est is not None else "no GPS fix yet"
+        if est is None or self.last_fix is None:
+            note = "no GPS fix yet"
             self.report(rec, est, None, None, None, arrival, links, stop, note=note)
             return None
         try:

@@ -463,6 +463,7 @@ def next_waypoint(
         If no beacon is estimated yet, or a yaw-rate planner has no heading.
     """
     est = survey_estimates(records, settings) if estimates is None else estimates
+    est = with_drop_priors(est, settings)
     if est.n_beacons == 0:
         waiting = ", ".join(f"{b}: {c}" for b, c in zip(est.waiting_beacons, est.waiting_ranges, strict=True))
         raise DataError(
@@ -509,6 +510,29 @@ def next_waypoint(
         status=plan.status,
         origin=est.origin,
         untrusted_beacons=est.beacons[~est.trusted],
+    )
+
+
+def with_drop_priors(est: SurveyEstimates, settings: JournalSettings) -> SurveyEstimates:
+    """The estimates to plan with: those of :func:`survey_estimates`, plus, for each survey beacon with a
+    drop position but too few ranges yet, its prior (mean at the drop, covariance
+    ``diag(prior_sigma_enu_m^2)``, not trusted), so that the first sites are planned from the first fix."""
+    have = set(est.beacons.tolist())
+    extra = [d for d in settings.drops if d[0] not in have]
+    if not extra:
+        return est
+    surface = float(np.median(est.track_enu_m[:, 2])) if est.track_enu_m.size else 0.0
+    means = drop_means_enu_m(settings, est.origin, surface)
+    ids = np.array([d[0] for d in extra], dtype=np.int64)
+    pos = np.array([means[int(b)] for b in ids])
+    cov = np.broadcast_to(np.diag(np.square(settings.prior_sigma_enu_m)), (ids.size, 3, 3))
+    order = np.argsort(np.concatenate([est.beacons, ids]), kind="stable")
+    return dataclasses.replace(
+        est,
+        beacons=np.concatenate([est.beacons, ids])[order],
+        positions_enu_m=np.concatenate([est.positions_enu_m, pos])[order],
+        covariances_m2=np.concatenate([est.covariances_m2, cov])[order],
+        trusted=np.concatenate([est.trusted, np.zeros(ids.size, dtype=bool)])[order],
     )
 
 

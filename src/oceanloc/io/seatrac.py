@@ -654,7 +654,9 @@ class SeatracPinger:
                 if msg.status == Cst.XCVR_RESP_TIMEOUT:
                     return failed("timeout", f"no acoustic reply within the beacon's range timeout ({name})")
                 return failed(name.lower(), f"ping failed ({name})")
-            elif isinstance(msg, AcoFix) and msg.src_id == beacon_id:
+            elif isinstance(msg, AcoFix) and msg.src_id == beacon_id and acknowledged:
+                # (a response before this ping's send status is a late answer to an earlier ping, of
+                # this process or of one killed mid-ping: its range belongs to another time)
                 t = self.clock()
                 rng = range_from_fix(msg, self.sound_speed_mps)
                 if rng is None:
