@@ -234,3 +234,27 @@ def test_simulator_stops_cleanly_and_the_pinger_reports_a_closed_port():
         SeatracPinger("/dev/null", beacons=[16])
     with pytest.raises(ConfigError, match="transponder id 0"):
         BeaconSimConfig(transponders_enu_m={0: (0.0, 0.0, 0.0)})
+
+
+def test_a_response_before_the_send_status_is_a_late_answer_and_is_ignored():
+    """After a restart (or a ping that timed out), the head may still deliver the answer to an earlier ping
+    of the same beacon: it comes before this ping's send status, and its range belongs to another time."""
+
+    def fix(dist_m: float) -> AcoFix:
+        return AcoFix(
+            dest_id=15, src_id=2, flags=RANGE_VALID, msg_type=MsgType.MSG_RESP, yaw_deg=0.0, pitch_deg=0.0,
+            roll_deg=0.0, depth_local_m=0.0, vos_mps=1500.0, rssi_db=-50.0,
+            range=AcoRange(count=0, time_s=dist_m / 1500.0, dist_m=dist_m),
+        )  # fmt: skip
+
+    master, slave, thread, _ = _scripted_beacon(
+        [encode_ping_resp(fix(99.0)), encode_ping_send_status(Cst.OK, 2), encode_ping_resp(fix(15.0))]
+    )
+    try:
+        with SeatracPinger(os.ttyname(slave), beacons=[2], timeout_s=1.0) as pinger:
+            rec = pinger.ping(2)
+    finally:
+        thread.join(2)
+        os.close(master)
+        os.close(slave)
+    assert rec.status == "ok" and rec.range_m == pytest.approx(15.0, abs=1e-6)
