@@ -1,5 +1,6 @@
-"""``survey run --mission``: the planned sites go to the boat as a mission flown in AUTO (in process, with
-the boat simulator's telemetry as the position source and the SeaTrac beacon simulator)."""
+"""``survey run --mission``: the planned sites go to the boat as a mission flown in AUTO, and at the end the
+boat is sent back (``--return-to``); in process, with the boat simulator's telemetry as the position
+source and the SeaTrac beacon simulator."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from oceanloc.field.live_sources import position_opener, range_opener
 from oceanloc.field.live_survey import LiveOptions, StopRule, run_live_survey
 from oceanloc.io.journal import Journal
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
-from oceanloc.sim.boat import MODE_AUTO, MODE_HOLD
+from oceanloc.sim.boat import MODE_AUTO, MODE_GUIDED
 from tests.field._live_rig import LAT0, LON0, live_rig
 
 TRANSPONDERS = {3: (40.0, 25.0, -30.0)}
@@ -36,6 +37,7 @@ def test_mission_mode_uploads_the_planned_sites_and_flies_them_in_auto(tmp_path:
             assert vehicle.connect(5.0).ok
             opts = LiveOptions(
                 stop=StopRule(max_sites=4), command="mission", fence_radius_m=200.0, ping_interval_s=0.1,
+                return_to=(LAT0, LON0),
                 watchdog=WatchdogConfig(position_timeout_s=2.0, ranges_timeout_s=5.0, vehicle_timeout_s=2.0),
             )  # fmt: skip
             result = run_live_survey(
@@ -44,12 +46,14 @@ def test_mission_mode_uploads_the_planned_sites_and_flies_them_in_auto(tmp_path:
                 options=opts, on_epoch=lambda e: modes.append(rig.boat.mode),
             )  # fmt: skip
             mission = rig.boat.mission
+            final_mode, target = rig.boat.mode, rig.boat.target_en_m
         finally:
             vehicle.close()
-        final_mode = rig.boat.mode
     assert result.status == "sites" and result.sites == 4, result.message
     assert MODE_AUTO in modes  # flown in AUTO between uploads
-    assert final_mode == MODE_HOLD  # held when the site budget was spent
+    # the site budget spent, the boat is sent back to the start (--return-to) in GUIDED
+    assert final_mode == MODE_GUIDED and target is not None and math.hypot(*target) < 0.05
+    assert result.returned is not None and result.returned.ok
     # the last upload: home then the two planned sites of the look-ahead (k = 2)
     assert len(mission) == 3
     with Journal.open(path) as j:

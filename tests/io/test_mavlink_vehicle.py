@@ -248,6 +248,9 @@ def test_fixes_carry_the_heading_from_attitude(boat_and_vehicle):
 def test_mission_upload_then_auto_visits_every_item(boat_and_vehicle):
     sim, vehicle = boat_and_vehicle
     waypoints = [offset(30.0, 0.0), offset(30.0, 30.0), offset(0.0, 30.0)]
+    deadline = time.monotonic() + 5.0  # home is the latest fix: wait for the first (a busy machine is slow)
+    while vehicle.latest_fix() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
     up = vehicle.upload_mission(waypoints)
     assert up.status == "accepted", up.message
     assert (up.n_items, up.resends) == (4, 0)

@@ -428,6 +428,12 @@ class BoatSimulator:
             return self._mode
 
     @property
+    def target_en_m(self) -> tuple[float, float] | None:
+        """Where the autopilot is steering (east, north metres about the start), None when it is not."""
+        with self._lock:
+            return self._target
+
+    @property
     def mission(self) -> list:
         """The stored mission's MISSION_ITEM_INT messages (item 0 is home)."""
         with self._lock:
