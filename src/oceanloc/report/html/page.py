@@ -46,7 +46,7 @@ tr.pass td.verdict{color:#106010;font-weight:bold}tr.fail td.verdict{color:#b000
 dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}dd{margin:0}
 """
 
-_CSP = (
+CSP = (
     "default-src 'none'; script-src 'unsafe-inline' 'unsafe-eval'; style-src 'unsafe-inline'; "
     "img-src data: blob:; font-src data:"
 )
@@ -400,7 +400,8 @@ def series_figure(s: Series) -> go.Figure:
     return fig
 
 
-def _div(fig: go.Figure, div_id: str) -> str:
+def figure_div(fig: go.Figure, div_id: str) -> str:
+    """A figure as a ``<div>`` and its ``Plotly.newPlot`` call (the bundle is in the head)."""
     return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id, config=_PLOT_CONFIG)
 
 
@@ -486,16 +487,21 @@ def _provenance(prov: dict) -> str:
     return f'<dl id="provenance">{"".join(items)}</dl>'
 
 
+def page_head(title: str, kind: str, *, csp: str = CSP, head_extra: str = "") -> str:
+    """The page up to the ``<h1>``: CSP, style, plotly's bundle inline (shared by the live page)."""
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f'<meta http-equiv="Content-Security-Policy" content="{csp}">'
+        f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style>{head_extra}"
+        f'<script type="text/javascript">{get_plotlyjs()}</script></head>'
+        f'<body data-report-kind="{html.escape(kind)}"><h1>{html.escape(title)}</h1>'
+    )
+
+
 def render_html(report: Report) -> str:
     """The whole page as one string (about 4.7 MB of it is plotly's bundle)."""
-    parts = [
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-        f'<meta http-equiv="Content-Security-Policy" content="{_CSP}">'
-        f'<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f"<title>{html.escape(report.title)}</title><style>{_CSS}</style>"
-        f'<script type="text/javascript">{get_plotlyjs()}</script></head>'
-        f'<body data-report-kind="{html.escape(report.kind)}"><h1>{html.escape(report.title)}</h1>'
-    ]
+    parts = [page_head(report.title, report.kind)]
     if report.summary:
         parts.append(
             '<ul class="summary">' + "".join(f"<li>{html.escape(s)}</li>" for s in report.summary) + "</ul>"
@@ -505,13 +511,13 @@ def render_html(report: Report) -> str:
             '<h2>Map</h2><p class="note">East-north in metres about the frame\'s origin, equal '
             "scale; drag to pan, scroll to zoom, hover for values.</p>"
         )
-        parts.append(_div(map_figure(report.map), "map"))
+        parts.append(figure_div(map_figure(report.map), "map"))
     checks = "<h2>Checks</h2>" + _checks(report) if report.checks else ""
     if report.map is None:  # a record of statistics: its checks are what a reader looks for first
         parts.append(checks)
     if report.series:
         parts.append("<h2>Time series</h2>")
-        parts += [_div(series_figure(s), f"series-{i}") for i, s in enumerate(report.series)]
+        parts += [figure_div(series_figure(s), f"series-{i}") for i, s in enumerate(report.series)]
     if report.map is not None:
         parts.append(checks)
     for i, t in enumerate(report.tables):
