@@ -57,6 +57,8 @@ def report(
 
     if html is None and serve is None:
         raise DataError("nothing to do: give --html PATH (a report file) or --serve PORT (the live page)")
+    if kml is not None and html is None:
+        raise DataError("--kml PATH goes with --html PATH (the KML holds the report's map layers)")
     for out in (html, kml):
         if out is not None and not out.parent.is_dir():
             raise DataError(f"{out}: folder {out.parent} does not exist")

@@ -244,6 +244,7 @@ def test_cli_serves_and_exits_0_on_sigterm(journal):
     [
         (["--serve", "0", "--host", "0.0.0.0"], "refusing to serve the live page on 0.0.0.0"),
         ([], "nothing to do: give --html PATH"),
+        (["--serve", "0", "--kml", "x.kml"], "--kml PATH goes with --html PATH"),
     ],
 )
 def test_cli_usage_errors(journal, args, reason):
