@@ -154,3 +154,65 @@ def test_journal_sigma_by_time_ends_at_the_final_ellipse(sources, reports):
     for name, _, y, _, _ in sigma.lines:
         assert y[-1] == pytest.approx(finals[name], rel=1e-9)  # the last cut is the whole journal
         assert y[-1] < y[0]  # more ranges, smaller ellipse
+
+
+def gnssa_with_pings(sources) -> dict:
+    """The session's GNSS-A record with per-ping residuals added by hand to its first survey: two
+    transponders, 40 pings, three excluded for two reasons."""
+    rec = json.loads(sources["gnssa"].read_text())
+    t = np.arange(40.0) * 15.0
+    residual = 0.02 * np.sin(t / 50.0)
+    excluded = np.zeros(40, dtype=bool)
+    excluded[[5, 17, 30]] = True
+    residual[excluded] = [0.9, -1.1, 0.7]
+    reason = ["" if not e else "outlier" for e in excluded]
+    reason[30] = "elevation below 20 deg"
+    rec["surveys"][0]["pings"] = {
+        "t_s": t.tolist(),
+        "transponder": ["M1" if i % 2 else "M2" for i in range(40)],
+        "residual_m": residual.tolist(),
+        "excluded": excluded.tolist(),
+        "reason": reason,
+    }
+    return rec
+
+
+def test_gnssa_pings_draw_residuals_used_and_excluded_with_reasons(sources):
+    from oceanloc.report.html.records import gnssa_report
+
+    rec = gnssa_with_pings(sources)
+    rep = gnssa_report(rec)
+    pings = rep.series[-1]
+    assert pings.title == f"Residuals per ping: {rec['surveys'][0]['file']} (3 of 40 excluded)"
+    names = [line[0] for line in pings.lines]
+    assert names == [
+        "transponder M1 used",
+        "transponder M2 used",
+        "excluded: elevation below 20 deg",
+        "excluded: outlier",
+    ]
+    assert [len(line[1]) for line in pings.lines] == [18, 19, 1, 2]
+    assert pings.lines[3][2].tolist() == [0.9, -1.1]
+    assert pings.lines[3][4] == ["transponder M1: outlier"] * 2 and pings.lines[2][2].tolist() == [0.7]
+    assert "not per-ping residuals" not in " ".join(rep.notes)
+    page = render_html(rep)
+    assert "Residuals per ping" in page and "elevation below 20 deg" in page
+
+
+def test_gnssa_without_pings_has_no_ping_panel_and_says_so(reports):
+    rep = reports["gnssa"]
+    assert not any(s.title.startswith("Residuals per ping") for s in rep.series)
+    assert "not per-ping residuals" in " ".join(rep.notes)
+
+
+def test_gnssa_pings_of_unequal_length_are_a_data_error(sources, tmp_path):
+    from oceanloc.report.html.sources import load_report
+
+    rec = gnssa_with_pings(sources)
+    rec["surveys"][0]["pings"]["excluded"].pop()
+    path = tmp_path / "g.json"
+    path.write_text(json.dumps(rec))
+    with pytest.raises(
+        DataError, match=r"a gnssa record with a missing or malformed field.*differ in length"
+    ):
+        load_report(path)

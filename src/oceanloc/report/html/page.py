@@ -369,7 +369,11 @@ def series_figure(s: Series) -> go.Figure:
                 mode=mode,
                 name=name,
                 text=hover,
-                marker={"size": 4, "color": COLORS[i % len(COLORS)]},
+                marker=(
+                    {"size": 7, "symbol": "x", "color": COLORS[i % len(COLORS)]}
+                    if name.startswith("excluded")  # excluded pings stand out from the used ones
+                    else {"size": 4, "color": COLORS[i % len(COLORS)]}
+                ),
                 line={"color": COLORS[i % len(COLORS)]},
                 hovertemplate=(
                     f"{html.escape(name)}<br>%{{x}}: %{{y:.4g}}"
