@@ -332,3 +332,30 @@ def test_live_page_in_chromium_draws_appended_records(journal, tmp_path):
     assert f"ranges as taken ({n_ranges + APPEND_RANGES} drawn)" in dom["names"]
     assert dom["plan"].startswith("next site (greedy, computed here)")
     assert dom["connection"].startswith("connected")
+
+
+def test_page_of_a_journal_started_empty_fills_as_fixes_arrive(tmp_path):
+    from tests.report.html.conftest import JOURNAL_SETTINGS
+
+    path = tmp_path / "empty.db"
+    Journal.start(path, JOURNAL_SETTINGS.to_meta()).close()
+    with serve_journal(path, 0, estimate_period_s=0.2) as server:
+        d = _wait_until(server.url, lambda d: "est" in d)
+        assert d["fix"]["to"] == 0 and d["status"]["estimate"] == "no estimate yet (no GPS fix)"
+        assert [t.get("meta") for t in d["est"]["data"]] == ["track"]  # an empty track, styled
+        with Journal(path, create=False) as j:
+            j.add_fix(1.6e9, 32.7, -117.2, 0.0)
+            j.add_fix(1.6e9 + 1, 32.70001, -117.2, 0.0)
+        d = _wait_until(server.url, lambda d: d["fix"]["to"] == 2 and "est" in d, est=d["est"]["version"])
+        assert d["fix"]["e"] == [0.0, 0.0] and d["fix"]["n"][1] == pytest.approx(1.109, abs=1e-3)
+        assert d["status"]["estimate"].startswith("beacons estimated: none; waiting: 1 (0 ranges)")
+
+
+def _wait_until(url: str, ok, timeout_s: float = 15.0, **q) -> dict:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        d = _data(url, **q)
+        if ok(d):
+            return d
+        time.sleep(0.1)
+    raise AssertionError(f"not in time: {d}")

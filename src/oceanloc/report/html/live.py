@@ -457,11 +457,10 @@ class _Live:
 
 
 def _by_beacon(x: np.ndarray, beacon: np.ndarray, y: np.ndarray) -> dict[str, list]:
-    """``{beacon: [x list, y list]}`` for each beacon present."""
-    return {
-        str(int(b)): [x[beacon == b].tolist(), np.round(y[beacon == b], 4).tolist()]
-        for b in np.unique(beacon)
-    }
+    """``{beacon: [x list, y list]}`` for each beacon present (a value that is not finite is null)."""
+    shown = np.round(y, 4).astype(object)
+    shown[~np.isfinite(y)] = None
+    return {str(int(b)): [x[beacon == b].tolist(), shown[beacon == b].tolist()] for b in np.unique(beacon)}
 
 
 def _map_block(layers: MapLayers) -> dict:
