@@ -216,3 +216,39 @@ def test_gnssa_pings_of_unequal_length_are_a_data_error(sources, tmp_path):
         DataError, match=r"a gnssa record with a missing or malformed field.*differ in length"
     ):
         load_report(path)
+
+
+def test_dense_markers_are_drawn_as_their_extent_per_bin_keeping_every_extreme():
+    from oceanloc.report.html.model import Series
+    from oceanloc.report.html.page import MAX_SERIES_MARKERS, SERIES_BINS, series_figure
+
+    rng = np.random.default_rng(5)
+    n = 5 * MAX_SERIES_MARKERS
+    t = np.sort(rng.uniform(0.0, 86_400.0, n))
+    r = rng.normal(0.0, 0.05, n)
+    r[1234] = 0.9  # one isolated spike must stay visible
+    few = (t[:50], r[:50])
+    fig = series_figure(
+        Series(
+            title="x",
+            x_label="time (s)",
+            y_label="residual (m)",
+            lines=(("beacon 1 used", t, r, "markers", None), ("beacon 2 used", *few, "markers", None)),
+        )
+    )
+    dense, sparse = fig.data
+    assert dense.mode == "lines" and len(dense.x) <= 3 * SERIES_BINS
+    assert dense.name == f"beacon 1 used ({n} points, drawn as their extent per {np.ptp(t) / 1000:.3g} s)"
+    y = np.asarray(dense.y, dtype=float)
+    x = np.asarray(dense.x, dtype=float)
+    pad = 0.003 * np.ptp(r)
+    assert np.nanmax(y) == pytest.approx(0.9 + pad) and np.nanmin(y) == pytest.approx(r.min() - pad)
+    spike = x[np.nanargmax(y)]
+    assert abs(spike - t[1234]) <= np.ptp(t) / SERIES_BINS  # drawn in its own bin
+    lo, hi = y[0::3], y[1::3]  # every point lies on its bin's stroke
+    edges = np.linspace(t[0], t[-1], SERIES_BINS + 1)
+    b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, SERIES_BINS - 1)
+    mids = 0.5 * (edges[b] + edges[b + 1])
+    k = np.searchsorted(x[0::3], mids)
+    assert np.all((lo[k] <= r) & (r <= hi[k]))
+    assert sparse.mode == "markers" and len(sparse.x) == 50  # a short line keeps a marker per point

@@ -11,8 +11,9 @@ Reading never gets in the writer's way: each read opens its own SQLite connectio
 read (by ``rowid``) in one short read transaction, and closes it. Rows are checked with the journal's own
 checks (:func:`~oceanloc.io.journal.fix_problem`, ...) and invalid ones skipped. The estimates
 (:func:`~oceanloc.field.survey_journal.survey_estimates`) and the next site are recomputed in the
-background at most every :data:`ESTIMATE_PERIOD_S` seconds, only when records arrived and a page is
-watching; a request only copies what the client lacks. Where the journal has an ``events`` table
+background at most every :data:`ESTIMATE_PERIOD_S` seconds, when ranges arrived (every
+:data:`FIX_REFRESH_S` when only fixes did), and only while a page is watching; a request only copies
+what the client lacks. Where the journal has an ``events`` table
 (``seq, t, kind, body``; kinds ``estimate``, ``plan``, ``command``, ``link``, JSON bodies), the latest
 ``plan`` is the next site shown and the latest ``link`` state is printed; without it the next site is
 the survey planner's (:func:`~oceanloc.field.survey_journal.next_waypoint`).
@@ -73,6 +74,8 @@ POLL_S = 0.5
 """The journal is read at most this often (seconds), whatever the number of pages watching."""
 ESTIMATE_PERIOD_S = 2.0
 """The estimates are recomputed at most this often (seconds), and only when records arrived."""
+FIX_REFRESH_S = 10.0
+"""When only fixes arrived, the next site (from the last fix) is recomputed at most this often (seconds)."""
 WATCHED_S = 30.0
 """No estimate is computed when no page asked for data within this time (seconds)."""
 MAX_BATCH = 20_000
@@ -262,6 +265,9 @@ class _Live:
         self.est_note = {"estimate": "no estimate yet", "plan": "next site: none yet"}
         self.table_rows: list[list[str]] = []
         self.dirty = threading.Event()
+        self.moved = False
+        self.fix_t_estimated = -math.inf
+        self.estimated_at = -math.inf
         self.last_request = time.monotonic()
         self.read_error = ""
 
@@ -289,8 +295,12 @@ class _Live:
                 self.range_rows = self.tail.ranges.copy()
             new_plan = plan_seq != getattr(self, "_plan_seq", None)
             self._plan_seq = plan_seq
-        if n_fix or n_range or new_plan:
+        r = self.tail.ranges
+        pending = n_fix and r.shape[0] and float(r[:, 0].max()) >= self.fix_t_estimated
+        if n_range or new_plan or pending:  # pending: a range the last estimate could not align yet
             self.dirty.set()
+        elif n_fix:  # only the track moved: the next site from the last fix, at most every FIX_REFRESH_S
+            self.moved = True
 
     # -- estimator ------------------------------------------------------------------------------------
     def watched(self) -> bool:
@@ -299,6 +309,7 @@ class _Live:
     def estimate(self) -> None:
         """Re-estimate the beacons and the next site from everything read, and rebuild the map."""
         records = self.tail.records()
+        self.fix_t_estimated = float(records.fix_t_unix_s[-1]) if records.n_fixes else -math.inf
         plan = self.tail.latest_event.get("plan")
         layers_kw: dict[str, Any] = {}
         estimates: tuple[Estimate, ...] = ()
@@ -832,20 +843,26 @@ class LiveServer:
             self._live.read()
 
     def _estimate_loop(self) -> None:
-        """Re-estimate when records arrived, at most every period (longer when estimating is slow: it
-        takes at most a third of a core), and only while a page is watching (or before the first one)."""
+        """Re-estimate when ranges (or a plan) arrived, or when only fixes did and :data:`FIX_REFRESH_S`
+        passed; at most every period (longer when estimating is slow: it takes at most a third of a core),
+        and only while a page is watching (or before the first page)."""
+        live = self._live
         wait = 0.0
         while not self._stop.wait(wait):
-            if not self._live.dirty.wait(0.2) or (self._live.est_version and not self._live.watched()):
-                wait = 0.0
+            wait = 0.0
+            refresh = live.moved and time.monotonic() - live.estimated_at >= FIX_REFRESH_S
+            if not live.dirty.wait(0.2) and not refresh:
                 continue
-            self._live.dirty.clear()
-            t0 = time.monotonic()
+            if live.est_version and not live.watched():
+                continue
+            live.dirty.clear()
+            live.moved = False
+            t0 = live.estimated_at = time.monotonic()
             try:
-                self._live.estimate()
+                live.estimate()
             except Exception:  # a failed estimate must not end the page; the next may work
                 _LOG.warning("live page: estimate failed", exc_info=True)
-            wait = max(self._live.period_s, 2.0 * (time.monotonic() - t0))
+            wait = max(live.period_s, 2.0 * (time.monotonic() - t0))
 
     def stop(self) -> None:
         """Stop serving and join the threads (idempotent)."""

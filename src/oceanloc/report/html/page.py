@@ -28,6 +28,10 @@ MAX_TRACK_POINTS = 5000
 """Track points drawn at most (evenly strided, first and last kept)."""
 MAX_RANGE_SEGMENTS = 600
 """Range segments drawn at most."""
+MAX_SERIES_MARKERS = 2000
+"""A markers line of more points is drawn as its extent per time bin (see :func:`series_figure`)."""
+SERIES_BINS = 1000
+"""Bins of such a line (about one per pixel column of a report's panel)."""
 INSET_FRACTION = 0.01
 """Draw the magnified inset when the largest ellipse's semi-major axis is below this share of the map."""
 
@@ -356,16 +360,57 @@ def _scale_bar(fig: go.Figure, pts: np.ndarray) -> None:
     )
 
 
+def extent_per_bin(x: np.ndarray, y: np.ndarray, bins: int, pad: float) -> tuple[np.ndarray, np.ndarray]:
+    """A dense scatter as one vertical stroke per x bin, from its lowest to its highest y (NaN-separated).
+
+    Every point lies on a stroke, so no extreme value is hidden; ``pad`` lengthens each stroke at both
+    ends so a bin of one point still shows. Returns the stroke coordinates (``3 * used bins``).
+    """
+    keep = np.isfinite(x) & np.isfinite(y)
+    order = np.argsort(x[keep], kind="stable")
+    x, y = x[keep][order], y[keep][order]
+    edges = np.linspace(x[0], x[-1], bins + 1)
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    starts = np.flatnonzero(np.r_[True, idx[1:] != idx[:-1]])
+    lo, hi = np.minimum.reduceat(y, starts) - pad, np.maximum.reduceat(y, starts) + pad
+    mid = 0.5 * (edges[idx[starts]] + edges[idx[starts] + 1])
+    gap = np.full(mid.size, np.nan)
+    return np.column_stack([mid, mid, gap]).ravel(), np.column_stack([lo, hi, gap]).ravel()
+
+
+def _unit(label: str) -> str:
+    """The unit in an axis label's last parentheses (``time (s)`` -> ``s``), else empty."""
+    return label.rsplit("(", 1)[-1].rstrip(")") if label.endswith(")") else ""
+
+
 def series_figure(s: Series) -> go.Figure:
-    """One time-series panel."""
+    """One time-series panel.
+
+    A markers line of more than :data:`MAX_SERIES_MARKERS` numeric points and no per-point text (on a
+    linear axis) is drawn as its extent per :data:`SERIES_BINS` time bins (:func:`extent_per_bin`, strokes
+    at least 0.6 % of the axis span tall, about 2 px): one SVG path instead of a node per point, every
+    extreme still visible. Other lines of over 20,000 points use WebGL.
+    """
     fig = go.Figure()
+    spans = [np.asarray(y, dtype=float) for _, _, y, _, _ in s.lines if np.asarray(y).size]
+    finite = np.concatenate(spans)[np.isfinite(np.concatenate(spans))] if spans else np.zeros(0)
+    pad = 0.003 * float(np.ptp(finite)) if finite.size else 0.0
     for i, (name, x, y, mode, hover) in enumerate(s.lines):
-        n = np.asarray(x).size
-        cls = go.Scattergl if n > 20000 else go.Scatter
+        x, y = np.asarray(x), np.asarray(y)
+        n = x.size
+        dense = mode == "markers" and hover is None and n > MAX_SERIES_MARKERS and not s.log_y
+        if dense and x.dtype.kind in "fiu":
+            width = float(np.ptp(x[np.isfinite(x)])) / SERIES_BINS
+            x, y = extent_per_bin(x.astype(float), y.astype(float), SERIES_BINS, pad)
+            name = f"{name} ({n} points, drawn as their extent per {width:.3g} {_unit(s.x_label)})".replace(
+                "  ", " "
+            )
+            mode = "lines"
+        cls = go.Scattergl if n > 20000 and mode != "lines" else go.Scatter
         fig.add_trace(
             cls(
-                x=np.asarray(x),
-                y=np.asarray(y),
+                x=x,
+                y=y,
                 mode=mode,
                 name=name,
                 text=hover,
