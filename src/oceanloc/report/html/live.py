@@ -296,8 +296,9 @@ class _Live:
             new_plan = plan_seq != getattr(self, "_plan_seq", None)
             self._plan_seq = plan_seq
         r = self.tail.ranges
+        first = n_fix and self.fix_t_estimated == -math.inf
         pending = n_fix and r.shape[0] and float(r[:, 0].max()) >= self.fix_t_estimated
-        if n_range or new_plan or pending:  # pending: a range the last estimate could not align yet
+        if n_range or new_plan or first or pending:  # pending: a range the last estimate could not align
             self.dirty.set()
         elif n_fix:  # only the track moved: the next site from the last fix, at most every FIX_REFRESH_S
             self.moved = True
