@@ -359,3 +359,12 @@ def _wait_until(url: str, ok, timeout_s: float = 15.0, **q) -> dict:
             return d
         time.sleep(0.1)
     raise AssertionError(f"not in time: {d}")
+
+
+def test_port_in_use_is_a_data_error(journal):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        with pytest.raises(DataError, match=f"cannot serve the live page on 127.0.0.1:{port}: .*in use"):
+            serve_journal(journal, port)
