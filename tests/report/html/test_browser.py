@@ -74,3 +74,18 @@ def test_report_loads_offline_with_its_layers(sources, reports, kind, tmp_path):
             assert 600 in plots["map"]["markers"]  # one SVG marker per fix
         if ellipses:
             assert plots["map"]["paths"] >= ellipses
+
+
+def test_gnssa_ping_residuals_load_offline(sources, tmp_path):
+    from oceanloc.report.html.records import gnssa_report
+    from tests.report.html.test_page import gnssa_with_pings
+
+    rep = gnssa_report(gnssa_with_pings(sources))
+    page = tmp_path / "gnssa-pings.html"
+    page.write_text(render_html(rep), encoding="utf-8")
+    got = load_page(page, DOM, ready=PLOTLY_READY, timeout_s=30.0)
+    (tmp_path / "gnssa-pings.png").write_bytes(got.screenshot_png)
+    assert got.console_errors == [] and got.outside_requests == [] and got.failed_requests == []
+    pings = json.loads(got.value)["plots"][f"series-{len(rep.series) - 1}"]
+    assert pings["names"][-2:] == ["excluded: elevation below 20 deg", "excluded: outlier"]
+    assert pings["points"] == [18, 19, 1, 2] and pings["markers"] == [18, 19, 1, 2]

@@ -154,3 +154,101 @@ def test_journal_sigma_by_time_ends_at_the_final_ellipse(sources, reports):
     for name, _, y, _, _ in sigma.lines:
         assert y[-1] == pytest.approx(finals[name], rel=1e-9)  # the last cut is the whole journal
         assert y[-1] < y[0]  # more ranges, smaller ellipse
+
+
+def gnssa_with_pings(sources) -> dict:
+    """The session's GNSS-A record with per-ping residuals added by hand to its first survey: two
+    transponders, 40 pings, three excluded for two reasons."""
+    rec = json.loads(sources["gnssa"].read_text())
+    t = np.arange(40.0) * 15.0
+    residual = 0.02 * np.sin(t / 50.0)
+    excluded = np.zeros(40, dtype=bool)
+    excluded[[5, 17, 30]] = True
+    residual[excluded] = [0.9, -1.1, 0.7]
+    reason = ["" if not e else "outlier" for e in excluded]
+    reason[30] = "elevation below 20 deg"
+    rec["surveys"][0]["pings"] = {
+        "t_s": t.tolist(),
+        "transponder": ["M1" if i % 2 else "M2" for i in range(40)],
+        "residual_m": residual.tolist(),
+        "excluded": excluded.tolist(),
+        "reason": reason,
+    }
+    return rec
+
+
+def test_gnssa_pings_draw_residuals_used_and_excluded_with_reasons(sources):
+    from oceanloc.report.html.records import gnssa_report
+
+    rec = gnssa_with_pings(sources)
+    rep = gnssa_report(rec)
+    pings = rep.series[-1]
+    assert pings.title == f"Residuals per ping: {rec['surveys'][0]['file']} (3 of 40 excluded)"
+    names = [line[0] for line in pings.lines]
+    assert names == [
+        "transponder M1 used",
+        "transponder M2 used",
+        "excluded: elevation below 20 deg",
+        "excluded: outlier",
+    ]
+    assert [len(line[1]) for line in pings.lines] == [18, 19, 1, 2]
+    assert pings.lines[3][2].tolist() == [0.9, -1.1]
+    assert pings.lines[3][4] == ["transponder M1: outlier"] * 2 and pings.lines[2][2].tolist() == [0.7]
+    assert "not per-ping residuals" not in " ".join(rep.notes)
+    page = render_html(rep)
+    assert "Residuals per ping" in page and "elevation below 20 deg" in page
+
+
+def test_gnssa_without_pings_has_no_ping_panel_and_says_so(reports):
+    rep = reports["gnssa"]
+    assert not any(s.title.startswith("Residuals per ping") for s in rep.series)
+    assert "not per-ping residuals" in " ".join(rep.notes)
+
+
+def test_gnssa_pings_of_unequal_length_are_a_data_error(sources, tmp_path):
+    from oceanloc.report.html.sources import load_report
+
+    rec = gnssa_with_pings(sources)
+    rec["surveys"][0]["pings"]["excluded"].pop()
+    path = tmp_path / "g.json"
+    path.write_text(json.dumps(rec))
+    with pytest.raises(
+        DataError, match=r"a gnssa record with a missing or malformed field.*differ in length"
+    ):
+        load_report(path)
+
+
+def test_dense_markers_are_drawn_as_their_extent_per_bin_keeping_every_extreme():
+    from oceanloc.report.html.model import Series
+    from oceanloc.report.html.page import MAX_SERIES_MARKERS, SERIES_BINS, series_figure
+
+    rng = np.random.default_rng(5)
+    n = 5 * MAX_SERIES_MARKERS
+    t = np.sort(rng.uniform(0.0, 86_400.0, n))
+    r = rng.normal(0.0, 0.05, n)
+    r[1234] = 0.9  # one isolated spike must stay visible
+    few = (t[:50], r[:50])
+    fig = series_figure(
+        Series(
+            title="x",
+            x_label="time (s)",
+            y_label="residual (m)",
+            lines=(("beacon 1 used", t, r, "markers", None), ("beacon 2 used", *few, "markers", None)),
+        )
+    )
+    dense, sparse = fig.data
+    assert dense.mode == "lines" and len(dense.x) <= 3 * SERIES_BINS
+    assert dense.name == f"beacon 1 used ({n} points, drawn as their extent per {np.ptp(t) / 1000:.3g} s)"
+    y = np.asarray(dense.y, dtype=float)
+    x = np.asarray(dense.x, dtype=float)
+    pad = 0.003 * np.ptp(r)
+    assert np.nanmax(y) == pytest.approx(0.9 + pad) and np.nanmin(y) == pytest.approx(r.min() - pad)
+    spike = x[np.nanargmax(y)]
+    assert abs(spike - t[1234]) <= np.ptp(t) / SERIES_BINS  # drawn in its own bin
+    lo, hi = y[0::3], y[1::3]  # every point lies on its bin's stroke
+    edges = np.linspace(t[0], t[-1], SERIES_BINS + 1)
+    b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, SERIES_BINS - 1)
+    mids = 0.5 * (edges[b] + edges[b + 1])
+    k = np.searchsorted(x[0::3], mids)
+    assert np.all((lo[k] <= r) & (r <= hi[k]))
+    assert sparse.mode == "markers" and len(sparse.x) == 50  # a short line keeps a marker per point

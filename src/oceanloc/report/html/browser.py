@@ -6,6 +6,12 @@ a dead proxy (``127.0.0.1:9``) and CDP ``Network.emulateNetworkConditions(offlin
 returns the console errors, uncaught exceptions, every request that was not ``file:``/``data:``/``blob:``
 (none is allowed), failed requests, the load time, the result of a JavaScript expression evaluated in
 the page, and a PNG screenshot. Needs the PyPI package ``websocket-client``.
+
+A page served on loopback (the live page, an ``http://127.0.0.1:PORT/`` address) is loaded the same way
+except that requests to that one origin go through (the proxy is bypassed for its host and port only,
+and no offline emulation); any request elsewhere still counts as an outside request and fails at the
+dead proxy. ``actions`` run after the load, each followed by a wait for its own readiness expression:
+the live page test appends records to the journal and waits for them to be drawn.
 """
 
 from __future__ import annotations
@@ -19,8 +25,10 @@ import signal
 import subprocess
 import tempfile
 import time
+import urllib.parse
 import urllib.request
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +68,8 @@ class PageLoad:
     value : Any
         The value of the JavaScript expression.
     screenshot_png : bytes
+    action_s : list of float
+        For each action, from its start to its readiness expression being true (seconds).
     """
 
     console_errors: list[str]
@@ -68,6 +78,7 @@ class PageLoad:
     load_s: float
     value: Any
     screenshot_png: bytes
+    action_s: list[float] = field(default_factory=list)
 
 
 class _Cdp:
@@ -129,8 +140,12 @@ def load_page(
     height: int = 2400,
     timeout_s: float = 30.0,
     chromium: str | None = None,
+    actions: Sequence[tuple[Callable[[], object], str]] = (),
 ) -> PageLoad:
     """Open ``page`` offline in headless Chromium; evaluate ``expression`` once ``ready`` is true.
+
+    ``page`` is a file, or an ``http://`` address on loopback (only its origin is reachable). Each of
+    ``actions`` is ``(call, ready)``: ``call()`` runs after the load, then ``ready`` is waited for.
 
     Raises
     ------
@@ -145,6 +160,10 @@ def load_page(
     # process group is ended below, and a straggler's file never turns a finished load into an error.
     with tempfile.TemporaryDirectory(prefix="oceanloc-chromium-", ignore_cleanup_errors=True) as tmp:
         profile = Path(tmp)
+        url = str(page) if str(page).startswith("http://") else Path(page).resolve().as_uri()
+        served = urllib.parse.urlsplit(url)
+        origin = f"{served.scheme}://{served.netloc}" if served.scheme == "http" else None
+        bypass = "<-loopback>" if origin is None else f"<-loopback>;{served.hostname}:{served.port}"
         args = [
             exe,
             "--headless",
@@ -157,7 +176,7 @@ def load_page(
             "--disable-default-apps",
             "--disable-extensions",
             "--proxy-server=127.0.0.1:9",
-            "--proxy-bypass-list=<-loopback>",
+            f"--proxy-bypass-list={bypass}",
             f"--user-data-dir={profile}",
             "--remote-debugging-address=127.0.0.1",
             "--remote-debugging-port=0",
@@ -174,7 +193,7 @@ def load_page(
             target = next(t for t in targets if t.get("type") == "page")
             cdp = _Cdp(target["webSocketDebuggerUrl"], timeout_s)
             try:
-                return _drive(cdp, Path(page).resolve().as_uri(), expression, ready, deadline)
+                return _drive(cdp, url, expression, ready, deadline, origin, actions)
             finally:
                 cdp.close()
         finally:
@@ -193,29 +212,48 @@ def _end_group(proc: subprocess.Popen) -> None:
             continue
 
 
-def _drive(cdp: _Cdp, url: str, expression: str, ready: str, deadline: float) -> PageLoad:
+def _wait_true(cdp: _Cdp, url: str, ready: str, deadline: float) -> None:
+    while True:
+        ok = cdp.call("Runtime.evaluate", expression=f"Boolean({ready})", returnByValue=True)
+        if ok.get("result", {}).get("value") is True:
+            return
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"{url}: page not ready in time ({ready})")
+        time.sleep(0.02)
+
+
+def _drive(
+    cdp: _Cdp,
+    url: str,
+    expression: str,
+    ready: str,
+    deadline: float,
+    origin: str | None,
+    actions: Sequence[tuple[Callable[[], object], str]],
+) -> PageLoad:
     for domain in ("Page", "Runtime", "Log", "Network"):
         cdp.call(f"{domain}.enable")
-    cdp.call(
-        "Network.emulateNetworkConditions",
-        offline=True,
-        latency=0,
-        downloadThroughput=-1,
-        uploadThroughput=-1,
-    )
+    if origin is None:  # a file: nothing at all may be fetched
+        cdp.call(
+            "Network.emulateNetworkConditions",
+            offline=True,
+            latency=0,
+            downloadThroughput=-1,
+            uploadThroughput=-1,
+        )
     cdp.events.clear()
     t0 = time.monotonic()
     cdp.call("Page.navigate", url=url)
     if cdp.wait_event("Page.loadEventFired", deadline) is None:
         raise RuntimeError(f"{url}: no load event in time")
-    while True:
-        ok = cdp.call("Runtime.evaluate", expression=f"Boolean({ready})", returnByValue=True)
-        if ok.get("result", {}).get("value") is True:
-            break
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"{url}: page not ready in time ({ready})")
-        time.sleep(0.02)
+    _wait_true(cdp, url, ready, deadline)
     load_s = time.monotonic() - t0
+    action_s = []
+    for call, then_ready in actions:
+        t1 = time.monotonic()
+        call()
+        _wait_true(cdp, url, then_ready, deadline)
+        action_s.append(time.monotonic() - t1)
     value = cdp.call("Runtime.evaluate", expression=expression, returnByValue=True).get("result", {})
     shot = cdp.call("Page.captureScreenshot", format="png", captureBeyondViewport=False)
     errors, outside, failed = [], [], []
@@ -230,7 +268,7 @@ def _drive(cdp: _Cdp, url: str, expression: str, ready: str, deadline: float) ->
             errors.append(p["entry"].get("text", ""))
         elif m == "Network.requestWillBeSent":
             u = p.get("request", {}).get("url", "")
-            if not u.startswith(LOCAL_SCHEMES):
+            if not u.startswith(LOCAL_SCHEMES) and not (origin and u.startswith(origin + "/")):
                 outside.append(u)
         elif m == "Network.loadingFailed":
             failed.append(f"{p.get('errorText', '')} {p.get('requestId', '')}")
@@ -241,4 +279,5 @@ def _drive(cdp: _Cdp, url: str, expression: str, ready: str, deadline: float) ->
         load_s=load_s,
         value=value.get("value"),
         screenshot_png=base64.b64decode(shot["data"]),
+        action_s=action_s,
     )

@@ -20,7 +20,7 @@ from oceanloc.errors import DataError
 from oceanloc.field.survey_journal import RANGE_STATUS, SurveyEstimates, next_waypoint, survey_estimates
 from oceanloc.io.journal import Journal, JournalRecords
 from oceanloc.io.records import file_sha256
-from oceanloc.io.usbl import align_ranges
+from oceanloc.io.usbl import AlignedRanges, align_ranges
 from oceanloc.report.html.model import Check, Estimate, MapLayers, Report, Series, Table
 
 SIGMA_CUTS = 6
@@ -47,20 +47,30 @@ def _utc(t: float) -> str:
     return dt.datetime.fromtimestamp(t, dt.UTC).strftime("%Y-%m-%d %H:%M:%S")
 
 
+def range_geometry(
+    records: JournalRecords, settings: JournalSettings, est: SurveyEstimates
+) -> tuple[AlignedRanges, np.ndarray, np.ndarray, np.ndarray]:
+    """The ranges aligned with the track, whether their beacon is estimated, their residuals (m) and
+    each as a segment from the vehicle to its beacon's estimate, ``(k, 2, 2)`` east-north metres."""
+    aligned = align_ranges(
+        records.gps_log(), records.range_log(), origin=est.origin, max_gap_s=settings.max_gap_s
+    )
+    has = np.isin(aligned.beacon, est.beacons)
+    order = np.argsort(est.beacons)
+    at = np.clip(np.searchsorted(est.beacons[order], aligned.beacon), 0, max(est.n_beacons - 1, 0))
+    rows = order[at] if est.n_beacons else at
+    p_b = est.positions_enu_m[rows] if est.n_beacons else np.zeros((aligned.beacon.size, 3))
+    residual = aligned.range_m - np.linalg.norm(aligned.vehicle_enu_m - p_b, axis=1)
+    segs = np.stack([aligned.vehicle_enu_m[has, :2], p_b[has, :2]], axis=1)
+    return aligned, has, residual, segs
+
+
 def journal_report(path: str | Path) -> Report:
     """The report of the journal at ``path`` (see the module docstring)."""
     records, settings, meta = read_journal(path)
     est = survey_estimates(records, settings)
-    aligned = align_ranges(
-        records.gps_log(), records.range_log(), origin=est.origin, max_gap_s=settings.max_gap_s
-    )
-    index = {int(b): i for i, b in enumerate(est.beacons)}
-    has = np.array([int(b) in index for b in aligned.beacon], dtype=bool)
-    rows = np.array([index.get(int(b), 0) for b in aligned.beacon], dtype=np.int64)
-    p_b = est.positions_enu_m[rows] if est.n_beacons else np.zeros((aligned.beacon.size, 3))
-    residual = aligned.range_m - np.linalg.norm(aligned.vehicle_enu_m - p_b, axis=1)
+    aligned, has, residual, segs = range_geometry(records, settings, est)
     status = est.range_status[aligned.line]
-    segs = np.stack([aligned.vehicle_enu_m[has, :2], p_b[has, :2]], axis=1)
 
     estimates = tuple(
         Estimate(

@@ -28,6 +28,10 @@ MAX_TRACK_POINTS = 5000
 """Track points drawn at most (evenly strided, first and last kept)."""
 MAX_RANGE_SEGMENTS = 600
 """Range segments drawn at most."""
+MAX_SERIES_MARKERS = 2000
+"""A markers line of more points is drawn as its extent per time bin (see :func:`series_figure`)."""
+SERIES_BINS = 1000
+"""Bins of such a line (about one per pixel column of a report's panel)."""
 INSET_FRACTION = 0.01
 """Draw the magnified inset when the largest ellipse's semi-major axis is below this share of the map."""
 
@@ -46,7 +50,7 @@ tr.pass td.verdict{color:#106010;font-weight:bold}tr.fail td.verdict{color:#b000
 dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}dd{margin:0}
 """
 
-_CSP = (
+CSP = (
     "default-src 'none'; script-src 'unsafe-inline' 'unsafe-eval'; style-src 'unsafe-inline'; "
     "img-src data: blob:; font-src data:"
 )
@@ -356,20 +360,65 @@ def _scale_bar(fig: go.Figure, pts: np.ndarray) -> None:
     )
 
 
+def extent_per_bin(x: np.ndarray, y: np.ndarray, bins: int, pad: float) -> tuple[np.ndarray, np.ndarray]:
+    """A dense scatter as one vertical stroke per x bin, from its lowest to its highest y (NaN-separated).
+
+    Every point lies on a stroke, so no extreme value is hidden; ``pad`` lengthens each stroke at both
+    ends so a bin of one point still shows. Returns the stroke coordinates (``3 * used bins``).
+    """
+    keep = np.isfinite(x) & np.isfinite(y)
+    order = np.argsort(x[keep], kind="stable")
+    x, y = x[keep][order], y[keep][order]
+    edges = np.linspace(x[0], x[-1], bins + 1)
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    starts = np.flatnonzero(np.r_[True, idx[1:] != idx[:-1]])
+    lo, hi = np.minimum.reduceat(y, starts) - pad, np.maximum.reduceat(y, starts) + pad
+    mid = 0.5 * (edges[idx[starts]] + edges[idx[starts] + 1])
+    gap = np.full(mid.size, np.nan)
+    return np.column_stack([mid, mid, gap]).ravel(), np.column_stack([lo, hi, gap]).ravel()
+
+
+def _unit(label: str) -> str:
+    """The unit in an axis label's last parentheses (``time (s)`` -> ``s``), else empty."""
+    return label.rsplit("(", 1)[-1].rstrip(")") if label.endswith(")") else ""
+
+
 def series_figure(s: Series) -> go.Figure:
-    """One time-series panel."""
+    """One time-series panel.
+
+    A markers line of more than :data:`MAX_SERIES_MARKERS` numeric points and no per-point text (on a
+    linear axis) is drawn as its extent per :data:`SERIES_BINS` time bins (:func:`extent_per_bin`, strokes
+    at least 0.6 % of the axis span tall, about 2 px): one SVG path instead of a node per point, every
+    extreme still visible. Other lines of over 20,000 points use WebGL.
+    """
     fig = go.Figure()
+    spans = [np.asarray(y, dtype=float) for _, _, y, _, _ in s.lines if np.asarray(y).size]
+    finite = np.concatenate(spans)[np.isfinite(np.concatenate(spans))] if spans else np.zeros(0)
+    pad = 0.003 * float(np.ptp(finite)) if finite.size else 0.0
     for i, (name, x, y, mode, hover) in enumerate(s.lines):
-        n = np.asarray(x).size
-        cls = go.Scattergl if n > 20000 else go.Scatter
+        x, y = np.asarray(x), np.asarray(y)
+        n = x.size
+        dense = mode == "markers" and hover is None and n > MAX_SERIES_MARKERS and not s.log_y
+        if dense and x.dtype.kind in "fiu":
+            width = float(np.ptp(x[np.isfinite(x)])) / SERIES_BINS
+            x, y = extent_per_bin(x.astype(float), y.astype(float), SERIES_BINS, pad)
+            name = f"{name} ({n} points, drawn as their extent per {width:.3g} {_unit(s.x_label)})".replace(
+                "  ", " "
+            )
+            mode = "lines"
+        cls = go.Scattergl if n > 20000 and mode != "lines" else go.Scatter
         fig.add_trace(
             cls(
-                x=np.asarray(x),
-                y=np.asarray(y),
+                x=x,
+                y=y,
                 mode=mode,
                 name=name,
                 text=hover,
-                marker={"size": 4, "color": COLORS[i % len(COLORS)]},
+                marker=(
+                    {"size": 7, "symbol": "x", "color": COLORS[i % len(COLORS)]}
+                    if name.startswith("excluded")  # excluded pings stand out from the used ones
+                    else {"size": 4, "color": COLORS[i % len(COLORS)]}
+                ),
                 line={"color": COLORS[i % len(COLORS)]},
                 hovertemplate=(
                     f"{html.escape(name)}<br>%{{x}}: %{{y:.4g}}"
@@ -400,7 +449,8 @@ def series_figure(s: Series) -> go.Figure:
     return fig
 
 
-def _div(fig: go.Figure, div_id: str) -> str:
+def figure_div(fig: go.Figure, div_id: str) -> str:
+    """A figure as a ``<div>`` and its ``Plotly.newPlot`` call (the bundle is in the head)."""
     return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id, config=_PLOT_CONFIG)
 
 
@@ -486,16 +536,21 @@ def _provenance(prov: dict) -> str:
     return f'<dl id="provenance">{"".join(items)}</dl>'
 
 
+def page_head(title: str, kind: str, *, csp: str = CSP, head_extra: str = "") -> str:
+    """The page up to the ``<h1>``: CSP, style, plotly's bundle inline (shared by the live page)."""
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f'<meta http-equiv="Content-Security-Policy" content="{csp}">'
+        f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style>{head_extra}"
+        f'<script type="text/javascript">{get_plotlyjs()}</script></head>'
+        f'<body data-report-kind="{html.escape(kind)}"><h1>{html.escape(title)}</h1>'
+    )
+
+
 def render_html(report: Report) -> str:
     """The whole page as one string (about 4.7 MB of it is plotly's bundle)."""
-    parts = [
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-        f'<meta http-equiv="Content-Security-Policy" content="{_CSP}">'
-        f'<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f"<title>{html.escape(report.title)}</title><style>{_CSS}</style>"
-        f'<script type="text/javascript">{get_plotlyjs()}</script></head>'
-        f'<body data-report-kind="{html.escape(report.kind)}"><h1>{html.escape(report.title)}</h1>'
-    ]
+    parts = [page_head(report.title, report.kind)]
     if report.summary:
         parts.append(
             '<ul class="summary">' + "".join(f"<li>{html.escape(s)}</li>" for s in report.summary) + "</ul>"
@@ -505,13 +560,13 @@ def render_html(report: Report) -> str:
             '<h2>Map</h2><p class="note">East-north in metres about the frame\'s origin, equal '
             "scale; drag to pan, scroll to zoom, hover for values.</p>"
         )
-        parts.append(_div(map_figure(report.map), "map"))
+        parts.append(figure_div(map_figure(report.map), "map"))
     checks = "<h2>Checks</h2>" + _checks(report) if report.checks else ""
     if report.map is None:  # a record of statistics: its checks are what a reader looks for first
         parts.append(checks)
     if report.series:
         parts.append("<h2>Time series</h2>")
-        parts += [_div(series_figure(s), f"series-{i}") for i, s in enumerate(report.series)]
+        parts += [figure_div(series_figure(s), f"series-{i}") for i, s in enumerate(report.series)]
     if report.map is not None:
         parts.append(checks)
     for i, t in enumerate(report.tables):

@@ -199,6 +199,42 @@ def montecarlo_report(rec: dict) -> Report:
     )
 
 
+def _ping_series(label: str, pings: dict) -> Series:
+    """Residual per ping of a GNSS-A survey: the used ones by transponder, the excluded ones by reason.
+
+    ``pings`` holds equal-length lists ``t_s``, ``transponder``, ``residual_m``, ``excluded`` (bool) and
+    ``reason`` (text, empty for a used ping).
+    """
+    t = np.asarray(pings["t_s"], dtype=float)
+    tp = np.asarray([str(x) for x in pings["transponder"]])
+    res = np.asarray(pings["residual_m"], dtype=float)
+    excl = np.asarray(pings["excluded"], dtype=bool)
+    reason = np.asarray([str(x) for x in pings.get("reason") or [""] * t.size])
+    if not (t.size == tp.size == res.size == excl.size == reason.size):
+        raise ValueError(f"pings of {label}: t_s, transponder, residual_m, excluded, reason differ in length")
+    lines = [
+        (f"transponder {x} used", t[~excl & (tp == x)], res[~excl & (tp == x)], "markers", None)
+        for x in np.unique(tp[~excl])
+    ]
+    for why in np.unique(reason[excl]):
+        sel = excl & (reason == why)
+        lines.append(
+            (
+                f"excluded: {why or 'no reason given'}",
+                t[sel],
+                res[sel],
+                "markers",
+                [f"transponder {x}: {why}" for x in tp[sel]],
+            )
+        )
+    return Series(
+        title=f"Residuals per ping: {label} ({int(excl.sum())} of {t.size} excluded)",
+        x_label="ping time (s, as in the record)",
+        y_label="residual (m)",
+        lines=tuple(lines),
+    )
+
+
 def gnssa_report(rec: dict) -> Report:
     """GNSS-A surveys (``localize gnssa --json``): positions with ellipses, sound speed, spread checks."""
     sv = rec["surveys"]
@@ -255,6 +291,10 @@ def gnssa_report(rec: dict) -> Report:
             ),
         ),
     ]
+    groups = [(s["file"], s["pings"]) for s in sv if s.get("pings")]
+    if rec.get("pings"):
+        groups.append(("all surveys", rec["pings"]))
+    series += [_ping_series(label, pings) for label, pings in groups]
     checks = []
     sp = rec["spread"]
     for title, block in (
@@ -326,8 +366,8 @@ def gnssa_report(rec: dict) -> Report:
         provenance=rec.get("provenance", {}),
         notes=(
             "Positions are offsets from the reference position, metres; ellipses from each survey's "
-            "east and north sigmas (the record holds no east-north covariance). The record holds per-survey "
-            "residual statistics, not per-ping residuals.",
+            "east and north sigmas (the record holds no east-north covariance)."
+            + ("" if groups else " The record holds per-survey residual statistics, not per-ping residuals."),
         ),
     )
 
