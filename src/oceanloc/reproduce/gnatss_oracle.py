@@ -143,6 +143,7 @@ def run_gnatss(
     )
     return GnatssRun(
         output=out, version=str(info["version"]), solve_s=float(info["solve_s"]),
-        load_s=float(info["load_s"]), total_s=wall, position_xyz_m=xyz, delta_enu_m=d_enu, sigma_enu_m=s_enu, iterations=n_it,
+        load_s=float(info["load_s"]), total_s=wall, position_xyz_m=xyz, delta_enu_m=d_enu,
+        sigma_enu_m=s_enu, iterations=n_it,
         residuals=read_epoch_residuals(out / "residuals.csv"), outliers=outliers, deletions=deletions,
     )  # fmt: skip
