@@ -526,3 +526,34 @@ def _from_gnatss(sol: GnatssSolution, data: GnatssInput, apriori_enu: FloatArray
         extra={"outlier_t_s": sol.outlier_t_s.tolist(), "position_xyz_m": sol.position_xyz_m.tolist()},
         inputs=data.inputs,
     )
+
+
+def gnatss_example_config() -> Path:
+    """The packaged synthetic GNATSS-format survey's configuration (``oceanloc.data.gnatss_synthetic``)."""
+    from importlib import resources
+
+    return Path(str(resources.files("oceanloc.data.gnatss_synthetic") / "config.yaml"))
+
+
+def process_gnatss_survey(
+    config_path: str | Path | None,
+    *,
+    pxp_tt: str | Path | None = None,
+    positions: str | Path | None = None,
+    level2: str | Path | None = None,
+    ssp: str | Path | None = None,
+    deletions: str | Path | None = None,
+    method: str = "oceanloc",
+    solution: str = "independent",
+) -> GnatssLocalization:
+    """Read and solve a GNATSS-format survey (the packaged example when ``config_path`` is None): the one
+    call behind ``oceanloc localize gnssa --format gnatss``."""
+    if method not in METHODS:
+        raise ConfigError(f"--method must be one of {', '.join(METHODS)}, got {method!r}")
+    if solution not in SOLUTIONS:
+        raise ConfigError(f"--solution must be one of {', '.join(SOLUTIONS)}, got {solution!r}")
+    data = load_gnatss_input(
+        config_path or gnatss_example_config(),
+        pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp, deletions=deletions,
+    )  # fmt: skip
+    return localize_gnatss_input(data, method=method, solution=solution)

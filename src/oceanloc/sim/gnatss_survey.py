@@ -64,6 +64,7 @@ class ArraySurveySpec:
     internal_delays_s: tuple[float, ...] = (0.20, 0.60, 1.00)
     apriori_offset_enu_m: tuple[float, float, float] = (0.60, -0.40, 0.30)
     track_radius_m: tuple[float, float] = (20.0, 160.0)
+    track_period_s: float = 14_400.0
     lever_arm_frd_m: tuple[float, float, float] = (0.30, -0.10, 1.20)
     roll_amplitude_deg: float = 6.0
     pitch_amplitude_deg: float = 4.0
@@ -76,6 +77,7 @@ class ArraySurveySpec:
     drift_period_s: float = 7200.0
     gradient_per_km: tuple[float, float] = (0.0, 0.0)
     residual_limit_cm: float = 25.0
+    distance_limit_m: float = 150.0
     seed: int = 13
 
     def __post_init__(self) -> None:
@@ -172,7 +174,7 @@ def _platform(spec: ArraySurveySpec, t_rel_s: FloatArray) -> tuple[FloatArray, F
     """Antenna ENU (m) and roll, pitch, heading (deg) at times since the start (s)."""
     r_lo, r_hi = spec.track_radius_m
     omega = 2.0 * np.pi / 1800.0  # one loop per half hour
-    radius = r_lo + (r_hi - r_lo) * 0.5 * (1.0 - np.cos(2.0 * np.pi * t_rel_s / 14_400.0))
+    radius = r_lo + (r_hi - r_lo) * 0.5 * (1.0 - np.cos(2.0 * np.pi * t_rel_s / spec.track_period_s))
     ang = omega * t_rel_s
     e, n = radius * np.cos(ang), radius * np.sin(ang)
     heading = np.degrees(np.arctan2(np.cos(ang), -np.sin(ang)))  # direction of travel, clockwise from N
@@ -300,9 +302,28 @@ class GnatssSurveyFiles:
     truth: Path
 
 
-def gnatss_config_dict(truth: ArraySurveyTruth, folder: Path, output: Path | None = None) -> dict:
-    """The GNATSS configuration of a synthetic survey (solver on the Level-2 CSV and the CTD profile)."""
+EXAMPLE_SPEC = ArraySurveySpec(
+    n_pings=200,
+    ping_interval_s=36.0,
+    track_period_s=7200.0,
+    array_radius_m=600.0,
+    track_radius_m=(20.0, 700.0),
+    distance_limit_m=1000.0,
+    residual_limit_cm=60.0,
+    seed=2026,
+)
+"""The packaged example (``oceanloc.data.gnatss_synthetic``): 200 interrogations (36 s apart, 2 h) of three
+transponders 600 m from the centre, the platform looping out to 700 m and back (so each transponder is
+seen from many angles)."""
+
+
+def gnatss_config_dict(
+    truth: ArraySurveyTruth, folder: Path, output: Path | None = None, relative: bool = False
+) -> dict:
+    """The GNATSS configuration of a synthetic survey (solver on the Level-2 CSV and the CTD profile);
+    ``relative``: input paths relative to the configuration's folder (a packaged example)."""
     spec = truth.spec
+    base = Path() if relative else folder
     lat, lon, h = pymap3d.enu2geodetic(
         truth.apriori_enu_m[:, 0], truth.apriori_enu_m[:, 1], truth.apriori_enu_m[:, 2],
         truth.origin.lat_deg, truth.origin.lon_deg, truth.origin.h_m,
@@ -336,21 +357,22 @@ def gnatss_config_dict(truth: ArraySurveyTruth, folder: Path, output: Path | Non
             "geoid_undulation": spec.geoid_undulation_m,
             "bisection_tolerance": 1e-10,
             "harmonic_mean_start_depth": 0.0,
-            "distance_limit": 150.0,
+            "distance_limit": spec.distance_limit_m,
             "residual_limit": spec.residual_limit_cm,
             "input_files": {
-                "sound_speed": {"path": str(folder / "ctd_profile.txt")},
-                "gps_solution": {"path": str(folder / "gps_solution.csv")},
+                "sound_speed": {"path": str(base / "ctd_profile.txt")},
+                "gps_solution": {"path": str(base / "gps_solution.csv")},
             },
         },
-        "output": {"path": str(output or folder / "gnatss-output") + "/"},
+        "output": {"path": str(output or base / "gnatss-output") + "/"},
     }
 
 
 def write_gnatss_survey(
-    spec: ArraySurveySpec, folder: str | Path
+    spec: ArraySurveySpec, folder: str | Path, relative: bool = False
 ) -> tuple[ArraySurveyTruth, GnatssSurveyFiles]:
-    """Simulate the survey and write it in GNATSS's formats into ``folder`` (created)."""
+    """Simulate the survey and write it in GNATSS's formats into ``folder`` (created); ``relative``: the
+    configuration names its inputs relative to its folder."""
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     truth = simulate_array_survey(spec)
@@ -383,7 +405,7 @@ def write_gnatss_survey(
     write_roll_pitch_heading(
         out / "RPH", t_all[order], np.column_stack([rph[:, 0], rph[:, 1], rph[:, 2] % 360.0])
     )
-    write_gnatss_config(out / "config.yaml", gnatss_config_dict(truth, out))
+    write_gnatss_config(out / "config.yaml", gnatss_config_dict(truth, out, relative=relative))
     (out / "truth.json").write_text(json.dumps(truth.to_record(), indent=1), encoding="utf-8")
     files = GnatssSurveyFiles(
         folder=out, config=out / "config.yaml", pxp_tt=out / "pxp_tt",
