@@ -308,13 +308,15 @@ EXAMPLE_SPEC = ArraySurveySpec(
     track_period_s=7200.0,
     array_radius_m=600.0,
     track_radius_m=(20.0, 700.0),
+    internal_delays_s=(0.2, 2.2, 4.2),
     distance_limit_m=1000.0,
     residual_limit_cm=60.0,
     seed=2026,
 )
 """The packaged example (``oceanloc.data.gnatss_synthetic``): 200 interrogations (36 s apart, 2 h) of three
 transponders 600 m from the centre, the platform looping out to 700 m and back (so each transponder is
-seen from many angles)."""
+seen from many angles). The internal delays are 2 s apart so that the replies never change order: GNATSS
+pairs each interrogation's replies with its transponders by their order in time."""
 
 
 def gnatss_config_dict(
