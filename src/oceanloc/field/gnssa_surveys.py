@@ -142,8 +142,27 @@ class GnssaSurveys:
     def paths(self) -> list[str]:
         return [s.path for s in self.surveys]
 
+    def pings_record(self) -> dict[str, list]:
+        """Every ping of every survey: ``t_s`` (transmit time in the files' time base), ``transponder`` (the
+        survey's name: one transponder per file), ``residual_m`` (two-way path at the solution),
+        ``excluded`` and ``reason`` ("" for a used ping)."""
+        out: dict[str, list] = {"t_s": [], "transponder": [], "residual_m": [], "excluded": [], "reason": []}
+        for survey, res in zip(self.surveys, self.results, strict=True):
+            reasons = [""] * survey.n_pings
+            for x in res.exclusions:
+                reasons[x.index] = x.reason
+            out["t_s"] += [float(t) for t in survey.t_transmit_s]
+            out["transponder"] += [res.name] * survey.n_pings
+            out["residual_m"] += [float(r) for r in res.residual_m]
+            out["excluded"] += [not bool(u) for u in res.used]
+            out["reason"] += [
+                r if not u and r else ("excluded" if not u else "")
+                for r, u in zip(reasons, res.used, strict=True)
+            ]
+        return out
+
     def to_record(self) -> dict:
-        """Plain JSON-ready data: one entry per survey, the site velocity and the spreads."""
+        """Plain JSON-ready data: one entry per survey, the site velocity, the spreads and every ping."""
         spread = None
         if self.spread is not None and self.as_surveyed is not None:
             spread = self.spread.to_record()
@@ -152,6 +171,7 @@ class GnssaSurveys:
             "surveys": [r.to_record() for r in self.results],
             "site_velocity": self.site_velocity.to_record(),
             "spread": spread,
+            "pings": self.pings_record(),
         }
 
 
