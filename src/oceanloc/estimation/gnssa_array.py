@@ -597,10 +597,15 @@ class ArrayProblem:
         if self.gradient:
             g = 1e-3 * x[self.col_gradient : self.col_gradient + 2]
             factor = gradient_path_m2(pos, a) + gradient_path_m2(pos, b)
-            gj = gradient_path_jacobian(pos, a) + gradient_path_jacobian(pos, b)
             path = path + factor @ g
-            jac_p += g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]
             jac_path[:, self.col_gradient : self.col_gradient + 2] = 1e-3 * factor
+            for leg, rot in ((a, self.fixed("tx_rotation")), (b, s.receive_rotation)):
+                gj = gradient_path_jacobian(pos, leg)
+                d_grad = g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]  # d/d transponder = -d/d leg
+                jac_p += d_grad
+                if self.lever:
+                    cl = self.col_lever
+                    jac_path[:, cl : cl + 3] -= np.matmul(d_grad[:, None, :], rot)[:, 0, :]
         self._scatter_position(jac_path, jac_p)
         c = self.speed(x)
         model = path / c
@@ -682,7 +687,7 @@ def _whitening(problem: ArrayProblem, x: FloatArray, var_extra: FloatArray) -> t
     valid = (slots >= 0) & problem.mask[np.where(slots >= 0, slots, 0)]
     idx = np.where(valid, slots, 0)
     v = np.where(valid[..., None], u_tx[idx], 0.0)  # (n, S, 3)
-    cov = np.einsum("nsi,nij,nti->nst", v, s.transmit_antenna_cov_m2, v)
+    cov = np.einsum("nsi,nij,ntj->nst", v, s.transmit_antenna_cov_m2, v)
     diag = np.where(valid, var_rx[idx] + var_extra[idx], 1.0)
     cov = cov + diag[..., None] * np.eye(slots.shape[1])
     chol = np.linalg.cholesky(cov)
