@@ -63,6 +63,7 @@ from oceanloc.estimation.gnssa import (
 )
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S
 from oceanloc.io.gnssa_array import GnssaArraySurvey
 from oceanloc.models.acoustics import gradient_path_jacobian, gradient_path_m2
 from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bending_table
@@ -342,6 +343,8 @@ class GnssaArrayResult:
     iterations : tuple of ArrayIteration
     sigma_path_m, beta_m, residual_rms_m : float
     converged : bool
+    time_origin_unix_s : float
+        Unix time of the survey's time 0 (for :attr:`epoch_s` as UTC).
     status : str
         ``ok`` or what went wrong.
     """
@@ -383,6 +386,7 @@ class GnssaArrayResult:
     beta_m: float
     residual_rms_m: float
     converged: bool
+    time_origin_unix_s: float
     status: str = "ok"
 
     @property
@@ -423,7 +427,7 @@ class GnssaArrayResult:
             "file": self.name,
             "solution": self.solution,
             "acoustic_model": self.acoustic_model,
-            "epoch_utc": gnssa_epoch_utc(self.epoch_s),
+            "epoch_utc": gnssa_epoch_utc(self.epoch_s + self.time_origin_unix_s - GPS_EPOCH_2020_UNIX_S),
             "epoch_s": float(self.epoch_s),
             "transponders": transponders,
             "covariance_m2": self.covariance_m2.tolist(),
@@ -1220,5 +1224,6 @@ def _result(
         beta_m=float(beta),
         residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
         converged=bool(result.converged[0]),  # type: ignore[attr-defined]
+        time_origin_unix_s=float(survey.time_origin_unix_s),
         status="ok" if bool(result.converged[0]) else str(result.message[0]),  # type: ignore[attr-defined]
     )
