@@ -307,10 +307,16 @@ def solve_map(
     )
 
 
+_BLAS_GRAM_SIZE = 50_000
+"""Rows times unknowns of one problem from which ``J^T J`` is formed by BLAS, element by element."""
+
+
 def _gram(jac: FloatArray) -> FloatArray:
-    """``J^T J`` per batch element, ``(b, d, d)``: BLAS per element for a few large problems (one GNSS-A
-    survey of tens of thousands of rows), one einsum for many small ones (Monte Carlo batches)."""
-    if jac.shape[0] <= 4:
+    """``J^T J`` per batch element, ``(b, d, d)``: by BLAS element by element for large problems (a GNSS-A
+    survey of tens of thousands of rows, where einsum is several times slower), by one einsum for small
+    ones (Monte Carlo batches of many small problems). The choice depends on one problem's size only, so
+    a problem's numbers do not depend on the batch it is solved in."""
+    if jac.shape[1] * jac.shape[2] >= _BLAS_GRAM_SIZE:
         return np.stack([a.T @ a for a in jac])
     return np.einsum("bni,bnj->bij", jac, jac)
 
