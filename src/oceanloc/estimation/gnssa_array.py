@@ -38,7 +38,7 @@ as in :mod:`oceanloc.estimation.gnssa`.
 
 Robustness and uncertainty as in :mod:`oceanloc.estimation.gnssa`: a robust first fit per transponder
 screens gross travel times; the outlier rule removes the replies with the largest normalized residual
-above ``outlier_threshold`` (up to ``1 + n / 2000`` per round, so ten thousand pings need no thousand
+above ``outlier_threshold`` (up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand
 solves); a delete-one-block jackknife over contiguous time blocks (linearized at the solution: one
 normal-matrix downdate per block) and the survey-wide GNSS error (common to the whole array) are added to
 the formal covariance. Everything is vectorized over replies; the only Python loops run over
@@ -63,6 +63,7 @@ from oceanloc.estimation.gnssa import (
 )
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S
 from oceanloc.io.gnssa_array import GnssaArraySurvey
 from oceanloc.models.acoustics import gradient_path_jacobian, gradient_path_m2
 from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bending_table
@@ -70,6 +71,8 @@ from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bendi
 ACOUSTIC_MODELS: tuple[str, ...] = ("auto", "straight", "harmonic", "ray")
 SOLUTIONS: tuple[str, ...] = ("independent", "common_shift")
 OUTLIER_RULES: tuple[str, ...] = ("normalized", "residual")
+_ROBUST_FIT_REPLIES = 1000
+"""Replies per transponder the robust first fit uses (evenly spread); the screen then covers all."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -340,6 +343,8 @@ class GnssaArrayResult:
     iterations : tuple of ArrayIteration
     sigma_path_m, beta_m, residual_rms_m : float
     converged : bool
+    time_origin_unix_s : float
+        Unix time of the survey's time 0 (for :attr:`epoch_s` as UTC).
     status : str
         ``ok`` or what went wrong.
     """
@@ -381,6 +386,7 @@ class GnssaArrayResult:
     beta_m: float
     residual_rms_m: float
     converged: bool
+    time_origin_unix_s: float
     status: str = "ok"
 
     @property
@@ -421,7 +427,7 @@ class GnssaArrayResult:
             "file": self.name,
             "solution": self.solution,
             "acoustic_model": self.acoustic_model,
-            "epoch_utc": gnssa_epoch_utc(self.epoch_s),
+            "epoch_utc": gnssa_epoch_utc(self.epoch_s + self.time_origin_unix_s - GPS_EPOCH_2020_UNIX_S),
             "epoch_s": float(self.epoch_s),
             "transponders": transponders,
             "covariance_m2": self.covariance_m2.tolist(),
@@ -491,6 +497,27 @@ class ArrayProblem:
     mask: BoolArray  # (m,)
     slots: IntArray  # (n, S) reply index or -1
     whiten: FloatArray  # (n, S, S) inverse Cholesky factors
+    _cache: dict = field(default_factory=dict)
+
+    def invalidate(self) -> None:
+        """Forget the cached evaluation (after the mask, the whitening or the bending changed)."""
+        self._cache.pop("key", None)
+
+    def fixed(self, key: str) -> FloatArray:
+        """Arrays that do not change during the solve, computed once (rotations per reply, one-hot)."""
+        if key not in self._cache:
+            s = self.survey
+            if key == "tx_rotation":
+                self._cache[key] = s.transmit_rotation[s.reply_ping]
+            elif key == "rows":
+                self._cache[key] = np.arange(s.n_replies)[:, None]
+            elif key == "cols":
+                self._cache[key] = 3 * s.reply_transponder[:, None] + np.arange(3)[None, :]
+            elif key == "valid":
+                self._cache[key] = self.slots >= 0
+            elif key == "slot_index":
+                self._cache[key] = np.where(self.slots >= 0, self.slots, 0)
+        return self._cache[key]
 
     @property
     def batch_size(self) -> int:
@@ -530,14 +557,12 @@ class ArrayProblem:
         d = x.size
         j_of = s.reply_transponder
         pos = self.positions(x)[j_of]  # (m, 3)
-        lever = self.lever_arm(x)
-        a = s.transmit_enu_m(lever)[s.reply_ping]
-        b = s.receive_enu_m(lever)
+        a, b = self.legs(x)
         jac_p = np.zeros((m, 3))
         jac_l = np.zeros((m, 3))
         time = np.zeros(m)
         for leg, rot, delta in (
-            (a, s.transmit_rotation[s.reply_ping], ac.delta_tx_s),
+            (a, self.fixed("tx_rotation"), ac.delta_tx_s),
             (b, s.receive_rotation, ac.delta_rx_s),
         ):
             diff = leg - pos
@@ -567,51 +592,73 @@ class ArrayProblem:
             time += length * h + delta
             jac_p += d_p
             if self.lever:
-                jac_l += np.einsum("mi,mij->mj", d_leg, rot)
+                jac_l += np.matmul(d_leg[:, None, :], rot)[:, 0, :]
         path = ac.c_ref * time
         jac_path = np.zeros((m, d))
-        self._scatter_position(jac_path, ac.c_ref * jac_p)
+        jac_p *= ac.c_ref
         if self.lever:
             jac_path[:, self.col_lever : self.col_lever + 3] = ac.c_ref * jac_l
         if self.gradient:
             g = 1e-3 * x[self.col_gradient : self.col_gradient + 2]
             factor = gradient_path_m2(pos, a) + gradient_path_m2(pos, b)
-            gj = gradient_path_jacobian(pos, a) + gradient_path_jacobian(pos, b)
             path = path + factor @ g
-            self._scatter_position(jac_path, np.einsum("k,mkj->mj", g, gj))
             jac_path[:, self.col_gradient : self.col_gradient + 2] = 1e-3 * factor
+            for leg, rot in ((a, self.fixed("tx_rotation")), (b, s.receive_rotation)):
+                gj = gradient_path_jacobian(pos, leg)
+                d_grad = g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]  # d/d transponder = -d/d leg
+                jac_p += d_grad
+                if self.lever:
+                    cl = self.col_lever
+                    jac_path[:, cl : cl + 3] -= np.matmul(d_grad[:, None, :], rot)[:, 0, :]
+        self._scatter_position(jac_path, jac_p)
         c = self.speed(x)
         model = path / c
-        jac = jac_path / c[:, None]
+        jac = jac_path
+        jac /= c[:, None]
         if self.basis.shape[1]:
             jac[:, self.first_knot :] = (-path / (c * c))[:, None] * self.basis
         return model, jac
 
     def _scatter_position(self, jac: FloatArray, d_p: FloatArray) -> None:
-        """Add the per-reply position derivative ``(m, 3)`` to the state columns of its transponder."""
+        """Put the per-reply position derivative ``(m, 3)`` in the state columns of its transponder."""
         if self.geometry is not None:
-            jac[:, :3] += d_p
+            jac[:, :3] = d_p
             return
-        cols = 3 * self.survey.reply_transponder[:, None] + np.arange(3)[None, :]
-        rows = np.arange(jac.shape[0])[:, None]
-        jac[rows, cols] += d_p
+        jac[self.fixed("rows"), self.fixed("cols")] = d_p
+
+    def legs(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Transducer positions at transmit (per reply) and at receive, ``(m, 3)`` each."""
+        if not self.lever:
+            if "legs" not in self._cache:
+                s = self.survey
+                self._cache["legs"] = (s.transmit_enu_m()[s.reply_ping], s.receive_enu_m())
+            return self._cache["legs"]
+        s = self.survey
+        lever = self.lever_arm(x)
+        return s.transmit_enu_m(lever)[s.reply_ping], s.receive_enu_m(lever)
 
     def residual_m(self, x: FloatArray) -> FloatArray:
         """``c_ref (TWTT - tau - model)`` of every reply, metres."""
         return self.acoustics.c_ref * (self.twtt_s - self.model(x)[0])
 
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
+        """Whitened residuals ``(1, n S)`` and Jacobian ``(1, n S, d)``; the last evaluation is cached
+        (the solver asks for the cost of a trial and then, once accepted, for its Jacobian)."""
         xs = x[0]
+        key = xs.tobytes()
+        if self._cache.get("key") == key:
+            return self._cache["rw"], self._cache["jw"]
         model, jac = self.model(xs)
         c0 = self.acoustics.c_ref
         r = np.where(self.mask, c0 * (self.twtt_s - model), 0.0)
-        jm = np.where(self.mask[:, None], c0 * jac, 0.0)
-        valid = self.slots >= 0
-        idx = np.where(valid, self.slots, 0)
+        jac *= np.where(self.mask, c0, 0.0)[:, None]
+        valid, idx = self.fixed("valid"), self.fixed("slot_index")
         r_pad = np.where(valid, r[idx], 0.0)
-        j_pad = np.where(valid[..., None], jm[idx], 0.0)
-        rw = np.einsum("nij,nj->ni", self.whiten, r_pad).reshape(1, -1)
-        jw = np.einsum("nij,njd->nid", self.whiten, j_pad).reshape(1, -1, xs.size)
+        j_pad = jac[idx]
+        j_pad *= valid[..., None]
+        rw = np.matmul(self.whiten, r_pad[..., None])[..., 0].reshape(1, -1)
+        jw = np.matmul(self.whiten, j_pad).reshape(1, -1, xs.size)
+        self._cache.update(key=key, rw=rw, jw=jw)
         return rw, jw
 
 
@@ -644,7 +691,7 @@ def _whitening(problem: ArrayProblem, x: FloatArray, var_extra: FloatArray) -> t
     valid = (slots >= 0) & problem.mask[np.where(slots >= 0, slots, 0)]
     idx = np.where(valid, slots, 0)
     v = np.where(valid[..., None], u_tx[idx], 0.0)  # (n, S, 3)
-    cov = np.einsum("nsi,nij,nti->nst", v, s.transmit_antenna_cov_m2, v)
+    cov = np.einsum("nsi,nij,ntj->nst", v, s.transmit_antenna_cov_m2, v)
     diag = np.where(valid, var_rx[idx] + var_extra[idx], 1.0)
     cov = cov + diag[..., None] * np.eye(slots.shape[1])
     chol = np.linalg.cholesky(cov)
@@ -682,6 +729,7 @@ def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) 
             legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
             reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
             ac.tables[j] = bending_table(ac.profile, zb, top, 1.2 * reach + 10.0)
+    problem.invalidate()
     for leg, out in ((tx[s.reply_ping], ac.delta_tx_s), (rx, ac.delta_rx_s)):
         for j in range(pos.shape[0]):
             sel = j_of == j
@@ -739,18 +787,19 @@ def localize_gnssa_array(
     map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=None)
     exclusions: list[ReplyExclusion] = []
     iterations: list[ArrayIteration] = []
-    noise_rounds = 3 if opts.estimate_noise else 1
     result = None
     resid = np.zeros(m)
     sigma = np.ones(m)
     for rnd in range(opts.max_rounds):
-        for _ in range(noise_rounds):
+        # three noise re-estimations on the first round, one per round after it
+        for _ in range(3 if opts.estimate_noise and rnd == 0 else 1):
             x_before = x.copy()
             _refresh_bending(problem, x, force=rnd == 0 and not iterations)
             tan_inc = _tan_incidence(problem, x)
             extra = sigma_path**2 + (beta * tan_inc) ** 2
             problem.mask = used
             problem.whiten, gnss_var = _whitening(problem, x, extra)
+            problem.invalidate()
             result = solve_map(problem, prior, map_opts, initial=x[None, :])
             x = result.estimate[0]
             resid = problem.residual_m(x)
@@ -787,6 +836,7 @@ def localize_gnssa_array(
     problem.whiten, gnss_var = _whitening(
         problem, x, sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2
     )
+    problem.invalidate()
     result = solve_map(problem, prior, map_opts, initial=x[None, :])
     x = result.estimate[0]
     resid = problem.residual_m(x)
@@ -817,7 +867,7 @@ def _outliers(
     else:
         score = np.where(used, np.abs(resid) / sigma, 0.0)
         bad = np.flatnonzero(score > opts.outlier_threshold)
-        per_round = 1 + int(used.sum()) // 2000
+        per_round = 1 + int(used.sum()) // 1000
     order = bad[np.argsort(-score[bad], kind="stable")]
     return order[: min(per_round, room)]
 
@@ -903,10 +953,16 @@ def _setup(
         sel = np.flatnonzero(s.reply_transponder == j)
         a, b, t = tx[s.reply_ping[sel]], rx[sel], twtt[sel]
         if sel.size >= 8:
-            fit = robust_first_fit(a, b, t, c_guess, surface)
+            # the robust fit on at most _ROBUST_FIT_REPLIES replies spread over the survey; residuals of all
+            sub = np.arange(0, sel.size, max(1, sel.size // _ROBUST_FIT_REPLIES))
+            fit = robust_first_fit(a[sub], b[sub], t[sub], c_guess, surface)
             fits[j] = fit.position_enu_m
             if opts.prescreen:
-                r = fit.residual_m - np.median(fit.residual_m)
+                p_fit = fit.position_enu_m
+                resid_all = (
+                    c_guess * t - np.linalg.norm(a - p_fit, axis=1) - np.linalg.norm(b - p_fit, axis=1)
+                )
+                r = resid_all - np.median(fit.residual_m)
                 thr = max(opts.prescreen_sigmas * fit.sigma_m, opts.gross_error_m)
                 bad = np.abs(r) > thr
                 if bad.sum() > opts.max_gross_fraction * sel.size:
@@ -1049,7 +1105,8 @@ def _linearized_jackknife(
     block_of = np.full(s.n_pings, -1)
     block_of[order] = np.arange(order.size) * blocks // order.size
     info = np.linalg.inv(prior.cov)
-    a_full = np.einsum("nsi,nsj->ij", jw, jw) + info
+    flat = jw.reshape(-1, x.size)
+    a_full = flat.T @ flat + info
     reps = []
     for g in range(blocks):
         sel = block_of == g
@@ -1167,5 +1224,6 @@ def _result(
         beta_m=float(beta),
         residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
         converged=bool(result.converged[0]),  # type: ignore[attr-defined]
+        time_origin_unix_s=float(survey.time_origin_unix_s),
         status="ok" if bool(result.converged[0]) else str(result.message[0]),  # type: ignore[attr-defined]
     )

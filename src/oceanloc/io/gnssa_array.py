@@ -29,7 +29,7 @@ import numpy as np
 from oceanloc._typing import ArrayLike, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.geo.enu import EnuOrigin
-from oceanloc.io.gnssa import GnssaSurvey
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S, GnssaSurvey
 from oceanloc.io.qc import QcReport
 from oceanloc.models.attitude import interpolate_track, rotation_enu_from_body, transducer_jacobians
 
@@ -110,6 +110,9 @@ class GnssaArraySurvey:
         Source line of each reply (0 where none).
     qc : QcReport
         Lines the readers skipped, with reasons.
+    time_origin_unix_s : float
+        Unix time of the survey's time 0 (default 2020-01-01 UTC, the La Jolla files'; a reader of
+        another format sets its own, e.g. 946728000 for J2000 seconds).
     """
 
     name: str
@@ -133,6 +136,7 @@ class GnssaArraySurvey:
     approx_positions_enu_m: FloatArray | None = None
     line: IntArray | None = None
     qc: QcReport = field(default_factory=QcReport)
+    time_origin_unix_s: float = GPS_EPOCH_2020_UNIX_S
 
     def __post_init__(self) -> None:
         n, m, j = self.t_transmit_s.shape[0], self.twtt_s.shape[0], len(self.transponder_ids)
@@ -220,6 +224,7 @@ def array_survey_from_transducers(
     line: ArrayLike | None = None,
     path: str = "",
     qc: QcReport | None = None,
+    time_origin_unix_s: float = GPS_EPOCH_2020_UNIX_S,
 ) -> GnssaArraySurvey:
     """A survey from transducer positions given directly (no lever arm): see :class:`GnssaArraySurvey`."""
     t_tx = np.asarray(t_transmit_s, dtype=float)
@@ -250,6 +255,7 @@ def array_survey_from_transducers(
         else np.asarray(approx_positions_enu_m, float),
         line=None if line is None else np.asarray(line, dtype=np.int64),
         qc=qc or QcReport(),
+        time_origin_unix_s=time_origin_unix_s,
     )
 
 
@@ -270,6 +276,7 @@ def array_survey_from_track(
     line: ArrayLike | None = None,
     path: str = "",
     qc: QcReport | None = None,
+    time_origin_unix_s: float = GPS_EPOCH_2020_UNIX_S,
 ) -> GnssaArraySurvey:
     """A survey from a GNSS antenna track with attitude and a body-frame lever arm.
 
@@ -326,6 +333,7 @@ def array_survey_from_track(
         else np.asarray(approx_positions_enu_m, float),
         line=None if line is None else np.asarray(line, dtype=np.int64),
         qc=qc or QcReport(),
+        time_origin_unix_s=time_origin_unix_s,
     )
 
 

@@ -217,7 +217,7 @@ class BendingTable:
 
     Built by :func:`bending_table` on a grid of horizontal distances and transducer depths; evaluated by
     bilinear interpolation (:meth:`correction_s`). Its interpolation error is stated and tested: below
-    ``3e-8`` s one way (0.05 mm of path) with the default grid (65 distances, 3 transducer depths) on
+    ``3e-8`` s one way (0.05 mm of path) with the default grid (97 distances, 3 transducer depths) on
     offsets up to two water depths; it falls as the square of the grid spacing.
 
     Attributes
@@ -255,7 +255,7 @@ def bending_table(
     bottom_m: float,
     top_range_m: tuple[float, float],
     max_horizontal_m: float,
-    n_horizontal: int = 65,
+    n_horizontal: int = 97,
     n_top: int = 3,
 ) -> BendingTable:
     """Tabulate the bending correction (see :class:`BendingTable`) for one transponder depth.
