@@ -295,26 +295,6 @@ class TransducerPositions:
     qc: QcReport
 
 
-def _check_cov(values: Sequence[float], p: Path, number: int, qc: QcReport, what: str = "covariance") -> bool:
-    """A 9-entry covariance is usable: positive diagonal below 100 m^2, symmetric, |correlation| <= 1."""
-    c = np.asarray(values, dtype=float).reshape(3, 3)
-    d = np.diag(c)
-    if np.any(d <= 0.0):
-        qc.add(p, number, "non-numeric field", f"{what} diagonal {d.tolist()} m^2 is not positive")
-        return False
-    if np.any(d > 100.0):
-        qc.add(p, number, "out of range", f"{what} diagonal {d.max():g} m^2 > 100 m^2 (units: m^2?)")
-        return False
-    if not np.allclose(c, c.T, rtol=1e-6, atol=1e-12):
-        qc.add(p, number, "non-numeric field", f"{what} is not symmetric")
-        return False
-    corr = c / np.sqrt(np.outer(d, d))
-    if np.any(np.abs(corr) > 1.0 + 1e-6):
-        qc.add(p, number, "non-numeric field", f"{what} has a correlation above 1")
-        return False
-    return True
-
-
 def _check_ecef(xyz: Sequence[float], p: Path, number: int, qc: QcReport) -> bool:
     r = math.sqrt(sum(v * v for v in xyz))
     lo, hi = EARTH_RADIUS_RANGE_M
@@ -322,6 +302,52 @@ def _check_ecef(xyz: Sequence[float], p: Path, number: int, qc: QcReport) -> boo
         qc.add(p, number, "out of range", f"|XYZ| {r:.1f} m is not an Earth-fixed surface position (metres)")
         return False
     return True
+
+
+Why = list[tuple[str, str] | None]
+
+
+def _cov_why(cov: FloatArray, what: str = "covariance") -> Why:
+    """Per matrix of ``(k, 3, 3)``: None if usable (as :func:`_check_cov`), else ``(reason, detail)``."""
+    k = cov.shape[0]
+    d = np.diagonal(cov, axis1=1, axis2=2)
+    nonpos = np.any(d <= 0.0, axis=1)
+    big = ~nonpos & np.any(d > 100.0, axis=1)
+    scale = np.maximum(np.abs(cov), np.abs(np.swapaxes(cov, 1, 2)))
+    asym = np.any(np.abs(cov - np.swapaxes(cov, 1, 2)) > 1e-12 + 1e-6 * scale, axis=(1, 2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.sqrt(np.maximum(d[:, :, None] * d[:, None, :], 1e-300))
+    high = np.any(np.abs(corr) > 1.0 + 1e-6, axis=(1, 2))
+    out: Why = [None] * k
+    for i in np.flatnonzero(nonpos | big | asym | high):
+        if nonpos[i]:
+            out[i] = ("non-numeric field", f"{what} diagonal {d[i].tolist()} m^2 is not positive")
+        elif big[i]:
+            out[i] = ("out of range", f"{what} diagonal {d[i].max():g} m^2 > 100 m^2 (units: m^2?)")
+        elif asym[i]:
+            out[i] = ("non-numeric field", f"{what} is not symmetric")
+        else:
+            out[i] = ("non-numeric field", f"{what} has a correlation above 1")
+    return out
+
+
+def _ecef_why(xyz: FloatArray) -> Why:
+    """Per position of ``(k, 3)``: None if on the Earth's surface in metres, else ``(reason, detail)``."""
+    r = np.linalg.norm(xyz, axis=1)
+    lo, hi = EARTH_RADIUS_RANGE_M
+    out: Why = [None] * xyz.shape[0]
+    for i in np.flatnonzero((r < lo) | (r > hi)):
+        out[i] = ("out of range", f"|XYZ| {r[i]:.1f} m is not an Earth-fixed surface position (metres)")
+    return out
+
+
+def _first(*whys: Why) -> Why:
+    """The first problem of each row among several checks."""
+    return [next((w for w in ws if w is not None), None) for ws in zip(*whys, strict=True)]
+
+
+def _sort_issues(qc: QcReport) -> None:
+    qc.issues.sort(key=lambda i: (i.file, i.line))
 
 
 def read_pos_freed_trans_twtt(path: str | Path) -> TransducerPositions:
@@ -339,9 +365,8 @@ def read_pos_freed_trans_twtt(path: str | Path) -> TransducerPositions:
     """
     p = Path(path)
     qc = QcReport()
-    rows: list[list[float]] = []
-    lines: list[int] = []
-    last_t = -math.inf
+    parsed: list[list[float]] = []
+    numbers: list[int] = []
     for number, text in read_lines(p, qc):
         if text.startswith("#"):
             qc.lines_read -= 1
@@ -352,20 +377,27 @@ def read_pos_freed_trans_twtt(path: str | Path) -> TransducerPositions:
             qc.add(p, number, reason, f"{len(fields)} fields, expected 13 (time, X, Y, Z, 9 covariance)")
             continue
         values = _floats(fields, p, number, qc)
-        if values is None or not _check_ecef(values[1:4], p, number, qc):
-            continue
-        if not _check_cov(values[4:], p, number, qc):
-            continue
-        if values[0] <= last_t:
-            qc.add(p, number, "time going backwards", f"{values[0]:.6f} s after {last_t:.6f} s")
-            continue
-        last_t = values[0]
-        rows.append(values)
-        lines.append(number)
-    if not rows:
+        if values is not None:
+            parsed.append(values)
+            numbers.append(number)
+    a = np.asarray(parsed, dtype=float).reshape(-1, 13)
+    why = _first(_ecef_why(a[:, 1:4]), _cov_why(a[:, 4:].reshape(-1, 3, 3)))
+    keep: list[int] = []
+    last_t = -math.inf
+    for i, w in enumerate(why):
+        if w is not None:
+            qc.add(p, numbers[i], *w)
+        elif a[i, 0] <= last_t:
+            qc.add(p, numbers[i], "time going backwards", f"{a[i, 0]:.6f} s after {last_t:.6f} s")
+        else:
+            last_t = a[i, 0]
+            keep.append(i)
+    _sort_issues(qc)
+    if not keep:
         raise _no_records(p, qc, "transducer position")
-    a = np.asarray(rows, dtype=float)
-    qc.records_kept = len(rows)
+    a = a[keep]
+    lines = [numbers[i] for i in keep]
+    qc.records_kept = len(keep)
     return TransducerPositions(
         path=str(p),
         t_s=a[:, 0],
@@ -603,69 +635,69 @@ def read_level2_csv(path: str | Path, ids: Sequence[str] | None = None) -> Array
         rows.append((number, cells))
     if header is None:
         raise _no_records(p, qc, "row (no header)")
-    col = {name: header.index(name) for name in LEVEL2_COLUMNS}
     numeric = [c for c in LEVEL2_COLUMNS if c != "MT_ID"]
+    num_idx = [header.index(c) for c in numeric]
+    mt_idx = header.index("MT_ID")
     known = list(ids) if ids is not None else []
-    out: dict[str, list[Any]] = {k: [] for k in ("tp", "t", "tt", "tx", "rx", "ctx", "crx", "line")}
+    values: list[list[float]] = []
+    numbers: list[int] = []
+    tps: list[int] = []
     for number, cells in rows:
         if len(cells) != len(header):
             qc.add(p, number, "wrong field count", f"{len(cells)} fields, header has {len(header)}")
             continue
-        values = _floats([cells[col[c]] for c in numeric], p, number, qc)
-        if values is None:
+        v = _floats([cells[i] for i in num_idx], p, number, qc)
+        if v is None:
             continue
-        v = dict(zip(numeric, values, strict=True))
-        mt = cells[col["MT_ID"]].strip()
+        mt = cells[mt_idx].strip()
         if mt not in known:
             if ids is not None:
                 qc.add(p, number, "unknown beacon id", f"MT_ID {mt!r} not in {list(ids)}")
                 continue
             known.append(mt)
-        tx = [v["X_transmit"], v["Y_transmit"], v["Z_transmit"]]
-        rx = [v["X_receive"], v["Y_receive"], v["Z_receive"]]
-        if not (_check_ecef(tx, p, number, qc) and _check_ecef(rx, p, number, qc)):
-            continue
-        ctx = [v[f"ant_cov_{a}{b}0"] for a in "XYZ" for b in "XYZ"]
-        crx = [v[f"ant_cov_{a}{b}1"] for a in "XYZ" for b in "XYZ"]
-        if not (
-            _check_cov(ctx, p, number, qc, "transmit covariance")
-            and _check_cov(crx, p, number, qc, "receive covariance")
-        ):
-            continue
-        tt = v["TravelTime"]
-        if not 0.0 < tt < MAX_TWTT_S:
-            qc.add(p, number, "negative or absurd range", f"TravelTime {tt:g} s")
-            continue
-        if abs(v["T_receive"] - v["T_transmit"] - tt) > 1e-3:
-            qc.add(
-                p,
-                number,
-                "out of range",
-                f"T_receive - T_transmit = {v['T_receive'] - v['T_transmit']:.6f} s, TravelTime {tt:.6f} s",
-            )
-            continue
-        out["tp"].append(known.index(mt))
-        out["t"].append(v["T_transmit"])
-        out["tt"].append(tt)
-        out["tx"].append(tx)
-        out["rx"].append(rx)
-        out["ctx"].append(ctx)
-        out["crx"].append(crx)
-        out["line"].append(number)
-    if not out["t"]:
+        values.append(v)
+        numbers.append(number)
+        tps.append(known.index(mt))
+    a = np.asarray(values, dtype=float).reshape(-1, len(numeric))
+
+    def cols(*names: str) -> FloatArray:
+        return a[:, [numeric.index(n) for n in names]]
+
+    tx = cols("X_transmit", "Y_transmit", "Z_transmit")
+    rx = cols("X_receive", "Y_receive", "Z_receive")
+    ctx = cols(*(f"ant_cov_{x}{y}0" for x in "XYZ" for y in "XYZ")).reshape(-1, 3, 3)
+    crx = cols(*(f"ant_cov_{x}{y}1" for x in "XYZ" for y in "XYZ")).reshape(-1, 3, 3)
+    t_rx, tt, t_tx = cols("T_receive", "TravelTime", "T_transmit").T
+    bad_tt: Why = [None] * a.shape[0]
+    for i in np.flatnonzero(~((tt > 0.0) & (tt < MAX_TWTT_S))):
+        bad_tt[i] = ("negative or absurd range", f"TravelTime {tt[i]:g} s")
+    bad_sum: Why = [None] * a.shape[0]
+    for i in np.flatnonzero(np.abs(t_rx - t_tx - tt) > 1e-3):
+        bad_sum[i] = (
+            "out of range",
+            f"T_receive - T_transmit = {t_rx[i] - t_tx[i]:.6f} s, TravelTime {tt[i]:.6f} s",
+        )
+    covs = (_cov_why(ctx, "transmit covariance"), _cov_why(crx, "receive covariance"))
+    why = _first(_ecef_why(tx), _ecef_why(rx), *covs, bad_tt, bad_sum)
+    for i, w in enumerate(why):
+        if w is not None:
+            qc.add(p, numbers[i], *w)
+    _sort_issues(qc)
+    keep = np.array([w is None for w in why], dtype=bool)
+    if not keep.any():
         raise _no_records(p, qc, "reply")
-    qc.records_kept = len(out["t"])
+    qc.records_kept = int(keep.sum())
     return ArrayPings(
         path=str(p),
         ids=tuple(known),
-        transponder=np.asarray(out["tp"], dtype=np.int64),
-        t_transmit_s=np.asarray(out["t"], dtype=float),
-        twtt_s=np.asarray(out["tt"], dtype=float),
-        transmit_xyz_m=np.asarray(out["tx"], dtype=float),
-        receive_xyz_m=np.asarray(out["rx"], dtype=float),
-        transmit_cov_m2=np.asarray(out["ctx"], dtype=float).reshape(-1, 3, 3),
-        receive_cov_m2=np.asarray(out["crx"], dtype=float).reshape(-1, 3, 3),
-        line=np.asarray(out["line"], dtype=np.int64),
+        transponder=np.asarray(tps, dtype=np.int64)[keep],
+        t_transmit_s=t_tx[keep],
+        twtt_s=tt[keep],
+        transmit_xyz_m=tx[keep],
+        receive_xyz_m=rx[keep],
+        transmit_cov_m2=ctx[keep],
+        receive_cov_m2=crx[keep],
+        line=np.asarray(numbers, dtype=np.int64)[keep],
         qc=qc,
     )
 
