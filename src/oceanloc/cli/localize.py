@@ -60,6 +60,15 @@ def gnssa(
     ssp: Annotated[
         Path | None, typer.Option("--ssp", help="gnatss: sound-speed profile (depth, speed).")
     ] = None,
+    antenna: Annotated[
+        Path | None,
+        typer.Option(
+            "--antenna", help="gnatss: GPS_POS_FREED antenna positions (with --pxp-tt, --attitude)."
+        ),
+    ] = None,
+    attitude: Annotated[
+        Path | None, typer.Option("--attitude", help="gnatss: roll, pitch, heading file (deg) for --antenna.")
+    ] = None,
     deletions: Annotated[
         Path | None, typer.Option("--deletions", help="gnatss: deletion file (deletns.dat or deletions.csv).")
     ] = None,
@@ -134,7 +143,7 @@ def gnssa(
             raise ConfigError("--format gnatss takes one configuration YAML")
         loc = process_gnatss_survey(
             files[0] if files else None, pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp,
-            deletions=deletions, method=method, solution=solution,
+            deletions=deletions, antenna=antenna, attitude=attitude, method=method, solution=solution,
         )  # fmt: skip
         _report_gnatss(loc, json_path, csv_dir, netcdf, show_exclusions)
         return

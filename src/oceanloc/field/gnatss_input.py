@@ -27,29 +27,35 @@ import numpy as np
 import pymap3d
 
 from oceanloc._typing import BoolArray, FloatArray
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, gnatss_solve
 from oceanloc.estimation.gnssa_array import ArrayGeometry, GnssaArrayOptions, localize_gnssa_array
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
 from oceanloc.io.gnatss import (
     RESIDUAL_SPEED_MPS,
+    AntennaPositions,
     ArrayPings,
+    Attitude,
     EpochResiduals,
     GnatssConfig,
+    PxpTravelTimes,
     SoundSpeedProfile,
     in_windows,
     j2000_iso,
     join_pxp_positions,
     read_deletions,
     read_gnatss_config,
+    read_gps_pos_freed,
     read_level2_csv,
     read_pos_freed_trans_twtt,
     read_pxp_tt,
+    read_roll_pitch_heading,
     read_sound_speed_profile,
     write_deletions_csv,
     write_epoch_residuals,
 )
 from oceanloc.io.gnssa_array import array_survey_from_transducers
+from oceanloc.models.attitude import interpolate_track, rotation_enu_from_body, transducer_enu_m
 from oceanloc.models.sound_profile import SoundSpeedProfile as ModelProfile
 
 METHODS: tuple[str, ...] = ("oceanloc", "gnatss")
@@ -68,6 +74,69 @@ class GnatssInput:
     inputs: tuple[str, ...]
 
 
+def transducer_pings_from_antenna(
+    travel: PxpTravelTimes,
+    antenna: AntennaPositions,
+    attitude: Attitude,
+    ids: tuple[str, ...],
+    lever_arm_frd_m: FloatArray,
+    origin: EnuOrigin,
+) -> ArrayPings:
+    """Per-reply transducer positions from GNSS antenna positions, attitude and the body-frame lever arm.
+
+    What GNATSS's posfilter does, without its Kalman filter: the antenna track (``GPS_POS_FREED``:
+    Earth-fixed positions and sigmas) and the roll-pitch-heading record are interpolated linearly to
+    each interrogation and each reply epoch (``time + travel time``;
+    :func:`~oceanloc.models.attitude.interpolate_track`), and the transducer is placed at
+    ``x_A + R(roll, pitch, heading) l`` (:func:`~oceanloc.models.attitude.transducer_enu_m`, body frame
+    forward-starboard-down as GNATSS's ``atd_offsets``). The antenna covariance is carried over; replies
+    whose epochs lie outside either record are recorded in the travel-time file's QC and skipped.
+    """
+    rot = _ecef_to_enu_rotation(origin)
+    ant_enu = _enu(antenna.xyz_m, origin)
+    ant_cov = rot @ (np.eye(3)[None] * antenna.sigma_xyz_m[:, None, :] ** 2) @ rot.T
+    t_tx = travel.t_transmit_s
+    t_rx = t_tx[:, None] + np.nan_to_num(travel.twtt_s)
+    lo = max(antenna.t_s[0], attitude.t_s[0])
+    hi = min(antenna.t_s[-1], attitude.t_s[-1])
+    tx_ok = (t_tx >= lo) & (t_tx <= hi)
+    ok = np.isfinite(travel.twtt_s) & tx_ok[:, None] & (t_rx >= lo) & (t_rx <= hi)
+    for i in np.flatnonzero(~tx_ok):
+        travel.qc.add(
+            travel.path,
+            int(travel.line[i]),
+            "invalid fix",
+            f"interrogation {t_tx[i]:.3f} s outside the antenna or attitude record",
+        )
+    rows, tps = np.nonzero(ok)
+    if rows.size == 0:
+        raise DataError(
+            f"{travel.path}: no reply lies within the antenna ({antenna.path}) and attitude records"
+        )
+    zeros3 = np.zeros((attitude.t_s.size, 3))
+
+    def transducer(t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        pos, cov, _ = interpolate_track(antenna.t_s, t, ant_enu, ant_cov, np.zeros((antenna.t_s.size, 3)))
+        _, _, att = interpolate_track(
+            attitude.t_s, t, zeros3, np.zeros((attitude.t_s.size, 3, 3)), attitude.rph_deg
+        )
+        r = rotation_enu_from_body(att[:, 0], att[:, 1], att[:, 2])
+        enu = transducer_enu_m(pos, r, lever_arm_frd_m)
+        x, y, z = pymap3d.enu2ecef(
+            enu[:, 0], enu[:, 1], enu[:, 2], origin.lat_deg, origin.lon_deg, origin.h_m
+        )
+        return np.stack([x, y, z], axis=-1), rot.T @ cov @ rot
+
+    tx_xyz, tx_cov = transducer(t_tx[rows])
+    rx_xyz, rx_cov = transducer(t_rx[rows, tps])
+    travel.qc.records_kept = int(np.unique(rows).size)
+    return ArrayPings(
+        path=travel.path, ids=ids, transponder=tps.astype(np.int64), t_transmit_s=t_tx[rows],
+        twtt_s=travel.twtt_s[rows, tps], transmit_xyz_m=tx_xyz, receive_xyz_m=rx_xyz, transmit_cov_m2=tx_cov,
+        receive_cov_m2=rx_cov, line=travel.line[rows], qc=travel.qc,
+    )  # fmt: skip
+
+
 def load_gnatss_input(
     config_path: str | Path,
     *,
@@ -76,10 +145,14 @@ def load_gnatss_input(
     level2: str | Path | None = None,
     ssp: str | Path | None = None,
     deletions: str | Path | None = None,
+    antenna: str | Path | None = None,
+    attitude: str | Path | None = None,
 ) -> GnatssInput:
     """Read a GNATSS survey; paths given here override the configuration's ``solver.input_files``.
 
-    Replies come from ``pxp_tt`` + ``positions`` (``POS_FREED_TRANS_TWTT``) if both are given, else
+    Replies come from ``pxp_tt`` + ``positions`` (``POS_FREED_TRANS_TWTT``) if both are given, from
+    ``pxp_tt`` + ``antenna`` (``GPS_POS_FREED``) + ``attitude`` (roll, pitch, heading) with the
+    configuration's ``posfilter.atd_offsets`` lever arm (:func:`transducer_pings_from_antenna`), else
     from ``level2`` (or the configuration's ``gps_solution``). Each transponder's speed is the
     profile's harmonic mean from ``harmonic_mean_start_depth`` to its a-priori depth, rounded to
     1 mm/s as GNATSS does (or the configuration's ``sv_mean`` when there is no profile).
@@ -93,10 +166,31 @@ def load_gnatss_input(
     """
     config = read_gnatss_config(config_path)
     ins = config.inputs
-    if (pxp_tt is None) != (positions is None):
+    if (antenna is None) != (attitude is None):
+        raise ConfigError(
+            "--antenna and --attitude go together (GNSS antenna positions and roll, pitch, heading)"
+        )
+    if antenna is not None and (pxp_tt is None or positions is not None):
+        raise ConfigError("--antenna and --attitude need --pxp-tt (and no --positions)")
+    if (pxp_tt is None) != (positions is None) and antenna is None:
         raise ConfigError("--pxp-tt and --positions go together (travel times and transducer positions)")
     used: list[str] = [str(config_path)]
-    if pxp_tt is not None and positions is not None:
+    if antenna is not None and attitude is not None and pxp_tt is not None:
+        if config.atd_offsets_frd_m is None:
+            raise ConfigError(
+                f"{config_path}: --antenna needs the lever arm posfilter.atd_offsets (forward, rightward, "
+                "downward)"
+            )
+        pings = transducer_pings_from_antenna(
+            read_pxp_tt(pxp_tt, len(config.ids)),
+            read_gps_pos_freed(antenna),
+            read_roll_pitch_heading(attitude),
+            config.ids,
+            np.asarray(config.atd_offsets_frd_m),
+            config.array_center,
+        )
+        used += [str(pxp_tt), str(antenna), str(attitude)]
+    elif pxp_tt is not None and positions is not None:
         pings = join_pxp_positions(
             read_pxp_tt(pxp_tt, len(config.ids)), read_pos_freed_trans_twtt(positions), config.ids
         )
@@ -543,6 +637,8 @@ def process_gnatss_survey(
     level2: str | Path | None = None,
     ssp: str | Path | None = None,
     deletions: str | Path | None = None,
+    antenna: str | Path | None = None,
+    attitude: str | Path | None = None,
     method: str = "oceanloc",
     solution: str = "independent",
 ) -> GnatssLocalization:
@@ -554,6 +650,7 @@ def process_gnatss_survey(
         raise ConfigError(f"--solution must be one of {', '.join(SOLUTIONS)}, got {solution!r}")
     data = load_gnatss_input(
         config_path or gnatss_example_config(),
-        pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp, deletions=deletions,
+        pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp, deletions=deletions, antenna=antenna,
+        attitude=attitude,
     )  # fmt: skip
     return localize_gnatss_input(data, method=method, solution=solution)

@@ -997,6 +997,7 @@ class GnatssConfig:
     residual_range_limit_cm: float = 20000.0
     gps_sigma_limit_m: float = 0.05
     inputs: dict[str, str] = field(default_factory=dict)
+    atd_offsets_frd_m: tuple[float, float, float] | None = None
 
     @property
     def ids(self) -> tuple[str, ...]:
@@ -1073,6 +1074,14 @@ def read_gnatss_config(path: str | Path) -> GnatssConfig:
     solver = doc.get("solver") or {}
     if not isinstance(solver, dict):
         raise DataError(f"{p}: solver must be a mapping")
+    atd = (doc.get("posfilter") or {}).get("atd_offsets") if isinstance(doc.get("posfilter"), dict) else None
+    offsets = None
+    if atd is not None:
+        if not isinstance(atd, dict) or any(k not in atd for k in ("forward", "rightward", "downward")):
+            raise DataError(f"{p}: posfilter.atd_offsets needs forward, rightward and downward (m)")
+        offsets = tuple(
+            _number(p, f"posfilter.atd_offsets.{k}", atd[k]) for k in ("forward", "rightward", "downward")
+        )
 
     def num(section: dict, key: str, default: float) -> float:
         return default if section.get(key) is None else _number(p, key, section[key])
@@ -1097,6 +1106,7 @@ def read_gnatss_config(path: str | Path) -> GnatssConfig:
         residual_range_limit_cm=num(solver, "residual_range_limit", 20000.0),
         gps_sigma_limit_m=num(solver, "gps_sigma_limit", 0.05),
         inputs=inputs,
+        atd_offsets_frd_m=offsets,
     )
 
 

@@ -400,9 +400,12 @@ def write_gnatss_survey(
     x, y, zz = (xyz_all[order, i] for i in range(3))
     e, nn, u = pymap3d.ecef2enu(x, y, zz, truth.origin.lat_deg, truth.origin.lon_deg, truth.origin.h_m)
     ant = np.stack([e, nn, u], axis=-1) - body_to_enu(rph, truth.lever_arm_frd_m)  # same GNSS noise
-    sig = np.asarray(spec.sigma_gnss_enu_m)
+    sig_enu = np.asarray(spec.sigma_gnss_enu_m)
+    sig_xyz = np.sqrt(
+        np.diag(_enu_cov_to_ecef(np.diag(sig_enu**2), truth.origin))
+    )  # the format's ECEF sigmas
     write_gps_pos_freed(
-        out / "GPS_POS_FREED", t_all[order], _to_ecef(ant, truth.origin), np.tile(sig, (t_rel.size, 1))
+        out / "GPS_POS_FREED", t_all[order], _to_ecef(ant, truth.origin), np.tile(sig_xyz, (t_rel.size, 1))
     )
     write_roll_pitch_heading(
         out / "RPH", t_all[order], np.column_stack([rph[:, 0], rph[:, 1], rph[:, 2] % 360.0])
