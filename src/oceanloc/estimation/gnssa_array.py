@@ -394,6 +394,16 @@ class GnssaArrayResult:
         """1-sigma of each transponder's (E, N, U), ``(J, 3)`` metres."""
         return np.sqrt(np.diag(self.covariance_m2)).reshape(-1, 3)
 
+    def speed_scale(self, t_s: FloatArray | float) -> FloatArray:
+        """The estimated correction to the profile at times ``t_s``: ``c(t) / c_ref``, by which every speed
+        of the given profile is to be multiplied (1 when the speed was fixed)."""
+        t = np.asarray(t_s, dtype=float)
+        if self.knot_times_s.size == 0:
+            return np.ones_like(t)
+        if self.knot_times_s.size == 1:
+            return np.full_like(t, self.sound_speed_knots_mps[0] / self.reference_speed_mps)
+        return np.interp(t, self.knot_times_s, self.sound_speed_knots_mps) / self.reference_speed_mps
+
     def position_covariance_m2(self, j: int) -> FloatArray:
         """The (3, 3) covariance of transponder ``j``."""
         return self.covariance_m2[3 * j : 3 * j + 3, 3 * j : 3 * j + 3]
