@@ -71,7 +71,7 @@ from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bendi
 ACOUSTIC_MODELS: tuple[str, ...] = ("auto", "straight", "harmonic", "ray")
 SOLUTIONS: tuple[str, ...] = ("independent", "common_shift")
 OUTLIER_RULES: tuple[str, ...] = ("normalized", "residual")
-_ROBUST_FIT_REPLIES = 1000
+_ROBUST_FIT_REPLIES = 400
 """Replies per transponder the robust first fit uses (evenly spread); the screen then covers all."""
 
 
