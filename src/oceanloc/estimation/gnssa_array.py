@@ -716,8 +716,8 @@ def _tan_incidence(problem: ArrayProblem, x: FloatArray) -> FloatArray:
 
 
 def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) -> None:
-    """Rebuild the bending tables where a transponder's depth moved by more than 0.5 m, and re-evaluate
-    the frozen bending corrections of every reply at ``x``."""
+    """Rebuild a transponder's bending table when its depth moved by more than 0.5 m or its legs left the
+    table's distances or transducer depths, and re-evaluate the frozen bending corrections at ``x``."""
     ac = problem.acoustics
     if ac.model != "ray" or ac.profile is None:
         return
@@ -735,9 +735,10 @@ def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) 
         sel = j_of == j
         if not sel.any():
             continue
-        if force or table is None or abs(table.bottom_m - zb) > 0.5:
-            legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
-            reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
+        legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
+        reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
+        stale = table is None or abs(table.bottom_m - zb) > 0.5 or reach > table.horizontal_m[-1]
+        if force or stale or top[0] < table.top_m[0] - 0.01 or top[1] > table.top_m[-1] + 0.01:
             ac.tables[j] = bending_table(ac.profile, zb, top, 1.2 * reach + 10.0)
     problem.invalidate()
     for leg, out in ((tx[s.reply_ping], ac.delta_tx_s), (rx, ac.delta_rx_s)):
