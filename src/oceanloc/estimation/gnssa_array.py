@@ -37,12 +37,23 @@ plus the path noise ``s`` and the far-ping term ``beta tan(incidence)`` estimate
 as in :mod:`oceanloc.estimation.gnssa`.
 
 Robustness and uncertainty as in :mod:`oceanloc.estimation.gnssa`: a robust first fit per transponder
-screens gross travel times; the outlier rule removes the replies with the largest normalized residual
-above ``outlier_threshold`` (up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand
-solves); a delete-one-block jackknife over contiguous time blocks (linearized at the solution: one
-normal-matrix downdate per block) and the survey-wide GNSS error (common to the whole array) are added to
-the formal covariance. Everything is vectorized over replies; the only Python loops run over
-transponders, rounds and blocks.
+(on at most 400 of its replies, spread over the survey) screens every reply for gross travel times;
+the outlier rule removes the replies with the largest normalized residual above ``outlier_threshold``
+(up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand solves); a delete-one-block
+jackknife over contiguous time blocks (linearized at the solution: one normal-matrix downdate per
+block) and the survey-wide GNSS error (common to the whole array) are added to the formal covariance.
+Everything is vectorized over replies; the only Python loops run over transponders, rounds and blocks.
+
+Use::
+
+    survey = array_survey_from_track(...)          # or array_survey_from_transducers / _from_gnssa
+    result = localize_gnssa_array(survey, GnssaArrayOptions(), profile=SoundSpeedProfile(...))
+    result.positions_enu_m, result.covariance_m2, result.positions_geodetic   # (J, 3), (3J, 3J), (J, 3)
+    result.residual_m[result.used], result.exclusions, result.iterations
+    result.speed_scale(t), result.gradient_per_km                             # the profile correction
+    localize_gnssa_array(survey, gnatss_like_options(residual_limit_m=...), profile=...)  # GNATSS's way
+    localize_gnssa_array(survey, GnssaArrayOptions(solution="common_shift"), profile=...,
+                         geometry=ArrayGeometry(positions_enu_m=previous_campaign_enu_m))
 """
 
 from __future__ import annotations
