@@ -235,7 +235,7 @@ def test_lever_arm_is_calibrated_when_heading_and_attitude_vary():
     res = localize_gnssa_array(survey, opts, profile=truth.profile)
     sigma = np.sqrt(np.diag(res.lever_arm_covariance_m2))
     err = res.lever_arm_body_m - truth.lever_arm_body_m
-    assert res.lever_arm_estimated
+    assert res.lever_arm_estimated and res.lever_arm_determined.tolist() == [True, True, True]
     # horizontal components: the heading turns through 360 deg, so they are well determined
     assert np.all(sigma[:2] < 0.05) and np.all(np.abs(err[:2]) < 4.0 * sigma[:2]), (err, sigma)
     # the vertical one only through roll and pitch: weaker, but still within its sigma's reach
@@ -251,6 +251,8 @@ def test_lever_arm_is_weakly_determined_at_constant_heading_and_level():
     # tell it from the array's position, so its sigma stays near the 1 m prior (with roll and pitch it
     # would show through the transducer's heave, l_y sin(roll))
     assert np.all(sigma[:2] > 0.5), sigma
+    assert res.lever_arm_determined[:2].tolist() == [False, False]
+    assert res.to_record()["lever_arm_determined"][:2] == [False, False]
     # and the transponders' horizontal sigmas inherit it
     assert np.all(res.sigma_enu_m[:, :2] > 0.5)
 

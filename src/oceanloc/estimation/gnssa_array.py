@@ -341,6 +341,9 @@ class GnssaArrayResult:
     lever_arm_covariance_m2 : (3, 3) float
         Its posterior covariance (the prior's when not estimated).
     lever_arm_estimated : bool
+    lever_arm_prior_sigma_m : (3,) float
+        The lever arm's prior 1-sigma (zeros when it is known exactly): compared with the posterior, it
+        says how much the survey's geometry determined it (:attr:`lever_arm_determined`).
     reply_ping, reply_transponder : (m,) int
         Copied from the survey, to read the per-reply arrays.
     residual_m : (m,) float
@@ -385,6 +388,7 @@ class GnssaArrayResult:
     lever_arm_body_m: FloatArray
     lever_arm_covariance_m2: FloatArray
     lever_arm_estimated: bool
+    lever_arm_prior_sigma_m: FloatArray
     reply_ping: IntArray
     reply_transponder: IntArray
     residual_m: FloatArray
@@ -404,6 +408,13 @@ class GnssaArrayResult:
     def sigma_enu_m(self) -> FloatArray:
         """1-sigma of each transponder's (E, N, U), ``(J, 3)`` metres."""
         return np.sqrt(np.diag(self.covariance_m2)).reshape(-1, 3)
+
+    @property
+    def lever_arm_determined(self) -> BoolArray:
+        """Per lever-arm component: calibrated, and its posterior sigma under half its prior sigma (the
+        survey's geometry, not the prior, determined it)."""
+        post = np.sqrt(np.diag(self.lever_arm_covariance_m2))
+        return self.lever_arm_estimated & (post < 0.5 * self.lever_arm_prior_sigma_m)
 
     def speed_scale(self, t_s: FloatArray | float) -> FloatArray:
         """The estimated correction to the profile at times ``t_s``: ``c(t) / c_ref``, by which every speed
@@ -469,6 +480,8 @@ class GnssaArrayResult:
             "lever_arm_body_m": [float(v) for v in self.lever_arm_body_m],
             "lever_arm_sigma_m": [float(v) for v in np.sqrt(np.diag(self.lever_arm_covariance_m2))],
             "lever_arm_estimated": bool(self.lever_arm_estimated),
+            "lever_arm_prior_sigma_m": [float(v) for v in self.lever_arm_prior_sigma_m],
+            "lever_arm_determined": [bool(v) for v in self.lever_arm_determined],
             "replies_used": int(self.used.sum()),
             "replies_excluded": len(self.exclusions),
             "exclusions": [x.to_record() for x in self.exclusions],
@@ -1203,8 +1216,10 @@ def _result(
         cl = problem.col_lever
         lever = x[cl : cl + 3].copy()
         lever_cov = cov_state[cl : cl + 3, cl : cl + 3].copy()
+        lever_prior = np.sqrt(np.diag(setup.prior.cov[cl : cl + 3, cl : cl + 3]))
     else:
         lever, lever_cov = survey.lever_arm_body_m.copy(), survey.lever_arm_cov_m2.copy()
+        lever_prior = np.sqrt(np.diag(lever_cov))
     geodetic = None if survey.origin is None else enu_to_geodetic(positions, survey.origin)
     all_exclusions = tuple(setup.exclusions) + tuple(exclusions)
     mean_speed = float(np.mean(speed[used]))
@@ -1234,6 +1249,7 @@ def _result(
         lever_arm_body_m=lever,
         lever_arm_covariance_m2=lever_cov,
         lever_arm_estimated=bool(opts.estimate_lever_arm),
+        lever_arm_prior_sigma_m=lever_prior,
         reply_ping=survey.reply_ping,
         reply_transponder=survey.reply_transponder,
         residual_m=resid,
