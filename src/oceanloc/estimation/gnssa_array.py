@@ -37,12 +37,23 @@ plus the path noise ``s`` and the far-ping term ``beta tan(incidence)`` estimate
 as in :mod:`oceanloc.estimation.gnssa`.
 
 Robustness and uncertainty as in :mod:`oceanloc.estimation.gnssa`: a robust first fit per transponder
-screens gross travel times; the outlier rule removes the replies with the largest normalized residual
-above ``outlier_threshold`` (up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand
-solves); a delete-one-block jackknife over contiguous time blocks (linearized at the solution: one
-normal-matrix downdate per block) and the survey-wide GNSS error (common to the whole array) are added to
-the formal covariance. Everything is vectorized over replies; the only Python loops run over
-transponders, rounds and blocks.
+(on at most 400 of its replies, spread over the survey) screens every reply for gross travel times;
+the outlier rule removes the replies with the largest normalized residual above ``outlier_threshold``
+(up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand solves); a delete-one-block
+jackknife over contiguous time blocks (linearized at the solution: one normal-matrix downdate per
+block) and the survey-wide GNSS error (common to the whole array) are added to the formal covariance.
+Everything is vectorized over replies; the only Python loops run over transponders, rounds and blocks.
+
+Use::
+
+    survey = array_survey_from_track(...)          # or array_survey_from_transducers / _from_gnssa
+    result = localize_gnssa_array(survey, GnssaArrayOptions(), profile=SoundSpeedProfile(...))
+    result.positions_enu_m, result.covariance_m2, result.positions_geodetic   # (J, 3), (3J, 3J), (J, 3)
+    result.residual_m[result.used], result.exclusions, result.iterations
+    result.speed_scale(t), result.gradient_per_km                             # the profile correction
+    localize_gnssa_array(survey, gnatss_like_options(residual_limit_m=...), profile=...)  # GNATSS's way
+    localize_gnssa_array(survey, GnssaArrayOptions(solution="common_shift"), profile=...,
+                         geometry=ArrayGeometry(positions_enu_m=previous_campaign_enu_m))
 """
 
 from __future__ import annotations
@@ -71,7 +82,7 @@ from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bendi
 ACOUSTIC_MODELS: tuple[str, ...] = ("auto", "straight", "harmonic", "ray")
 SOLUTIONS: tuple[str, ...] = ("independent", "common_shift")
 OUTLIER_RULES: tuple[str, ...] = ("normalized", "residual")
-_ROBUST_FIT_REPLIES = 1000
+_ROBUST_FIT_REPLIES = 400
 """Replies per transponder the robust first fit uses (evenly spread); the screen then covers all."""
 
 
@@ -330,6 +341,9 @@ class GnssaArrayResult:
     lever_arm_covariance_m2 : (3, 3) float
         Its posterior covariance (the prior's when not estimated).
     lever_arm_estimated : bool
+    lever_arm_prior_sigma_m : (3,) float
+        The lever arm's prior 1-sigma (zeros when it is known exactly): compared with the posterior, it
+        says how much the survey's geometry determined it (:attr:`lever_arm_determined`).
     reply_ping, reply_transponder : (m,) int
         Copied from the survey, to read the per-reply arrays.
     residual_m : (m,) float
@@ -374,6 +388,7 @@ class GnssaArrayResult:
     lever_arm_body_m: FloatArray
     lever_arm_covariance_m2: FloatArray
     lever_arm_estimated: bool
+    lever_arm_prior_sigma_m: FloatArray
     reply_ping: IntArray
     reply_transponder: IntArray
     residual_m: FloatArray
@@ -393,6 +408,23 @@ class GnssaArrayResult:
     def sigma_enu_m(self) -> FloatArray:
         """1-sigma of each transponder's (E, N, U), ``(J, 3)`` metres."""
         return np.sqrt(np.diag(self.covariance_m2)).reshape(-1, 3)
+
+    @property
+    def lever_arm_determined(self) -> BoolArray:
+        """Per lever-arm component: calibrated, and its posterior sigma under half its prior sigma (the
+        survey's geometry, not the prior, determined it)."""
+        post = np.sqrt(np.diag(self.lever_arm_covariance_m2))
+        return self.lever_arm_estimated & (post < 0.5 * self.lever_arm_prior_sigma_m)
+
+    def speed_scale(self, t_s: FloatArray | float) -> FloatArray:
+        """The estimated correction to the profile at times ``t_s``: ``c(t) / c_ref``, by which every speed
+        of the given profile is to be multiplied (1 when the speed was fixed)."""
+        t = np.asarray(t_s, dtype=float)
+        if self.knot_times_s.size == 0:
+            return np.ones_like(t)
+        if self.knot_times_s.size == 1:
+            return np.full_like(t, self.sound_speed_knots_mps[0] / self.reference_speed_mps)
+        return np.interp(t, self.knot_times_s, self.sound_speed_knots_mps) / self.reference_speed_mps
 
     def position_covariance_m2(self, j: int) -> FloatArray:
         """The (3, 3) covariance of transponder ``j``."""
@@ -448,6 +480,8 @@ class GnssaArrayResult:
             "lever_arm_body_m": [float(v) for v in self.lever_arm_body_m],
             "lever_arm_sigma_m": [float(v) for v in np.sqrt(np.diag(self.lever_arm_covariance_m2))],
             "lever_arm_estimated": bool(self.lever_arm_estimated),
+            "lever_arm_prior_sigma_m": [float(v) for v in self.lever_arm_prior_sigma_m],
+            "lever_arm_determined": [bool(v) for v in self.lever_arm_determined],
             "replies_used": int(self.used.sum()),
             "replies_excluded": len(self.exclusions),
             "exclusions": [x.to_record() for x in self.exclusions],
@@ -706,8 +740,8 @@ def _tan_incidence(problem: ArrayProblem, x: FloatArray) -> FloatArray:
 
 
 def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) -> None:
-    """Rebuild the bending tables where a transponder's depth moved by more than 0.5 m, and re-evaluate
-    the frozen bending corrections of every reply at ``x``."""
+    """Rebuild a transponder's bending table when its depth moved by more than 0.5 m or its legs left the
+    table's distances or transducer depths, and re-evaluate the frozen bending corrections at ``x``."""
     ac = problem.acoustics
     if ac.model != "ray" or ac.profile is None:
         return
@@ -725,9 +759,10 @@ def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) 
         sel = j_of == j
         if not sel.any():
             continue
-        if force or table is None or abs(table.bottom_m - zb) > 0.5:
-            legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
-            reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
+        legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
+        reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
+        stale = table is None or abs(table.bottom_m - zb) > 0.5 or reach > table.horizontal_m[-1]
+        if force or stale or top[0] < table.top_m[0] - 0.01 or top[1] > table.top_m[-1] + 0.01:
             ac.tables[j] = bending_table(ac.profile, zb, top, 1.2 * reach + 10.0)
     problem.invalidate()
     for leg, out in ((tx[s.reply_ping], ac.delta_tx_s), (rx, ac.delta_rx_s)):
@@ -1181,8 +1216,10 @@ def _result(
         cl = problem.col_lever
         lever = x[cl : cl + 3].copy()
         lever_cov = cov_state[cl : cl + 3, cl : cl + 3].copy()
+        lever_prior = np.sqrt(np.diag(setup.prior.cov[cl : cl + 3, cl : cl + 3]))
     else:
         lever, lever_cov = survey.lever_arm_body_m.copy(), survey.lever_arm_cov_m2.copy()
+        lever_prior = np.sqrt(np.diag(lever_cov))
     geodetic = None if survey.origin is None else enu_to_geodetic(positions, survey.origin)
     all_exclusions = tuple(setup.exclusions) + tuple(exclusions)
     mean_speed = float(np.mean(speed[used]))
@@ -1212,6 +1249,7 @@ def _result(
         lever_arm_body_m=lever,
         lever_arm_covariance_m2=lever_cov,
         lever_arm_estimated=bool(opts.estimate_lever_arm),
+        lever_arm_prior_sigma_m=lever_prior,
         reply_ping=survey.reply_ping,
         reply_transponder=survey.reply_transponder,
         residual_m=resid,
