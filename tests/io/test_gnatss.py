@@ -198,6 +198,14 @@ def test_deletions_both_layouts_and_windows(tmp_path: Path):
     assert legacy.tolist() == [[741009600.0, 741009660.0]]
     csv = read_deletions(_write(tmp_path, "deletions.csv", "starttime,endtime\n741009600.0,741009600.0\n"))
     assert in_windows(np.array([741009600.0, 741009601.0]), csv).tolist() == [True, False]
+    qc = read_deletions(
+        _write(
+            tmp_path,
+            "qc.csv",
+            "starttime,endtime,notes\n2023-06-26T00:00:00,2023-06-26 00:00:30,bad, noisy\n",
+        )
+    )
+    assert qc.tolist() == [[741009600.0, 741009630.0]]
     with pytest.raises(DataError, match=r"d.dat:1: time going backwards \(deletion ends before it starts\)"):
         read_deletions(_write(tmp_path, "d.dat", "26-JUN-23 00:01:00 26-JUN-23 00:00:00\n"))
 

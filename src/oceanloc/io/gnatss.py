@@ -807,8 +807,9 @@ def join_pxp_positions(
 def read_deletions(path: str | Path) -> FloatArray:
     """Time windows to delete, ``(k, 2)`` J2000 seconds (start, end), from a deletion file.
 
-    Two layouts: GNATSS's ``deletions.csv`` (header ``starttime,endtime``, J2000 seconds) and the
-    legacy manual ``deletns.dat`` (``DD-MON-YY HH:MM:SS DD-MON-YY HH:MM:SS`` then anything). A line
+    Three layouts: GNATSS's ``deletions.csv`` (header ``starttime,endtime``, J2000 seconds), its
+    ``quality_controls`` CSV (``starttime,endtime,notes``, J2000 seconds or ISO date-times) and the legacy
+    manual ``deletns.dat`` (``DD-MON-YY HH:MM:SS DD-MON-YY HH:MM:SS`` then anything). A line
     whose end is before its start, or that does not parse, is recorded and skipped.
 
     Raises
@@ -823,11 +824,19 @@ def read_deletions(path: str | Path) -> FloatArray:
         if text.startswith("#"):
             qc.lines_read -= 1
             continue
-        cells = [c for c in text.replace(",", " ").split() if c]
-        if cells[:2] == ["starttime", "endtime"]:
+        cells = [c.strip() for c in next(csv.reader([text]))] if "," in text else text.split()
+        if cells[0] == "starttime":
             qc.lines_read -= 1
             continue
-        if len(cells) >= 4 and not _is_float(cells[0]):
+        if "," in text and len(cells) >= 2:
+            try:
+                t0, t1 = _qc_time(cells[0]), _qc_time(cells[1])
+            except ValueError:
+                qc.add(
+                    p, number, "non-numeric field", "expected J2000 seconds or ISO date-times (start, end)"
+                )
+                continue
+        elif len(cells) >= 4 and not _is_float(cells[0]):
             try:
                 t0 = j2000_from_datetime(
                     dt.datetime.strptime(f"{cells[0]} {cells[1]}", DELETION_DATETIME_FORMAT)
@@ -857,6 +866,11 @@ def read_deletions(path: str | Path) -> FloatArray:
             f"{p}: {qc.issues[0]}" + (f" (and {len(qc.issues) - 1} more)" if len(qc.issues) > 1 else "")
         )
     return np.asarray(windows, dtype=float)
+
+
+def _qc_time(text: str) -> float:
+    """J2000 seconds from a number or an ISO date-time (GNATSS's ``quality_controls`` CSV)."""
+    return float(text) if _is_float(text) else j2000_from_datetime(dt.datetime.fromisoformat(text))
 
 
 def in_windows(t_s: FloatArray, windows: FloatArray) -> BoolArray:
