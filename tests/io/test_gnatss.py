@@ -240,3 +240,27 @@ def test_level2_writer_sorts_by_receive_time(tmp_path: Path, survey):
     truth, _ = survey
     back = read_level2_csv(write_level2_csv(tmp_path / "l2.csv", truth.pings))
     assert np.all(np.diff(back.t_receive_s) >= 0.0)
+
+
+# the Level-2 header and row of GNATSS's documentation ("L-2 Data")
+L2_DOC = (
+    "T_receive,MT_ID,TravelTime,T_transmit,ant_cov_XX1,ant_cov_XY1,ant_cov_XZ1,ant_cov_YX1,ant_cov_YY1,"
+    "ant_cov_YZ1,ant_cov_ZX1,ant_cov_ZY1,ant_cov_ZZ1,X_receive,Y_receive,Z_receive,ant_cov_XX0,ant_cov_XY0,"
+    "ant_cov_XZ0,ant_cov_YX0,ant_cov_YY0,ant_cov_YZ0,ant_cov_ZX0,ant_cov_ZY0,ant_cov_ZZ0,X_transmit,Y_transmit,"
+    "Z_transmit\n"
+    "712483771.569176,NDP1-2,3.569176,712483768.0,0.0002271,9.8e-07,-2.2e-07,9.8e-07,0.0002278,-3.1e-07,"
+    "-2.2e-07,-3.1e-07,0.00022849,-2606685.75482955,-3705817.00172181,4474091.26651063,7.841e-05,1.1e-07,"
+    "-4e-08,1.1e-07,7.849e-05,-6e-08,-4e-08,-6e-08,7.857e-05,-2606687.12007168,-3705817.05582391,"
+    "4474089.56415817\n"
+)
+
+
+def test_documented_level2_row(tmp_path: Path):
+    from oceanloc.io.gnatss import LEVEL2_COLUMNS
+
+    assert ",".join(LEVEL2_COLUMNS) == L2_DOC.splitlines()[0]  # the column order GNATSS writes
+    pings = read_level2_csv(_write(tmp_path, "gps_solution.csv", L2_DOC))
+    assert pings.ids == ("NDP1-2",)
+    assert pings.twtt_s[0] == pytest.approx(3.569176)
+    assert pings.transmit_cov_m2[0, 2, 2] == pytest.approx(7.857e-05)
+    assert pings.receive_xyz_m[0, 2] == pytest.approx(4474091.26651063)
