@@ -161,7 +161,6 @@ def _solve(
     cov_tx = pings.transmit_cov_m2[table[:, 0]]  # (E, 3, 3)
     tt = pings.twtt_s[table] - delay  # (E, m)
     n_data = tt.size
-    J = np.tile(np.eye(3), (m, 1))  # (3m, 3)
     x = x0.copy()
     iterations: list[GnatssIteration] = []
     converged = False
@@ -198,7 +197,6 @@ def _solve(
             converged = True
             break
         x = x + shift
-    _ = J
     return x, cov, tuple(iterations), converged, resid
 
 

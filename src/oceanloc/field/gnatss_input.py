@@ -28,7 +28,7 @@ import pymap3d
 
 from oceanloc._typing import BoolArray, FloatArray
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, gnatss_solve
+from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, apriori_xyz_m, gnatss_solve
 from oceanloc.estimation.gnssa_array import ArrayGeometry, GnssaArrayOptions, localize_gnssa_array
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
 from oceanloc.io.gnatss import (
@@ -500,8 +500,6 @@ def localize_gnatss_input(
         raise ConfigError(f"solution must be one of {', '.join(SOLUTIONS)}, got {solution!r}")
     cfg = data.config
     origin = cfg.array_center
-    from oceanloc.estimation.gnatss_compat import apriori_xyz_m
-
     apriori_enu = _enu(apriori_xyz_m(cfg), origin)
     p = data.pings
     if method == "gnatss":
