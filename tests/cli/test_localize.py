@@ -42,7 +42,13 @@ def test_localize_gnssa_json_shape_figures_and_spread(tmp_path: Path):
     assert res.exit_code == 0, res.output
     assert "Spread across 2 surveys" in res.output
     data = json.loads(out.read_text())
-    assert set(data) == {"provenance", "surveys", "site_velocity", "spread"}
+    assert set(data) == {"provenance", "surveys", "site_velocity", "spread", "pings"}
+    pings = data["pings"]
+    assert list(pings) == ["t_s", "transponder", "residual_m", "excluded", "reason"]
+    n = sum(s["pings_used"] + s["pings_excluded"] for s in data["surveys"])
+    assert len(pings["t_s"]) == len(pings["reason"]) == n
+    assert sum(pings["excluded"]) == sum(s["pings_excluded"] for s in data["surveys"])
+    assert all(bool(r) == x for r, x in zip(pings["reason"], pings["excluded"], strict=True))
     assert [Path(i["path"]).name for i in data["provenance"]["inputs"]] == [Path(p).name for p in paths]
     assert data["site_velocity"]["plate"] == "PCFC" and "Lat0 32.8668" in data["site_velocity"]["reason"]
     assert [s["file"] for s in data["surveys"]] == ["gnssa_data_20211210", "gnssa_data_20220321"]

@@ -8,9 +8,20 @@ from typing import Annotated
 import typer
 
 from oceanloc.cli import root
-from oceanloc.cli._common import JsonOut, cli_provenance, console, ensure_dir, err_console, escape, write_json
+from oceanloc.cli._common import (
+    JsonOut,
+    cli_provenance,
+    console,
+    ensure_dir,
+    err_console,
+    escape,
+    write_json,
+    write_netcdf,
+)
 from oceanloc.cli._options import parse_origin
+from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions
+from oceanloc.field.gnatss_input import GnatssLocalization, process_gnatss_survey
 from oceanloc.field.gnssa_surveys import process_gnssa_surveys
 from oceanloc.field.range_logs import LogPair, localize_log_files, range_noise_files
 from oceanloc.io.gnssa import lajolla_paths
@@ -26,8 +37,54 @@ def gnssa(
     files: Annotated[
         list[Path] | None,
         typer.Argument(
-            help="GNSS-A ping files; none: the five packaged La Jolla surveys.", show_default=False
+            help="GNSS-A ping files; none: the five packaged La Jolla surveys. With --format gnatss: one "
+            "GNATSS configuration YAML (none: the packaged synthetic array survey).",
+            show_default=False,
         ),
+    ] = None,
+    fmt: Annotated[
+        str,
+        typer.Option(
+            "--format",
+            help="Input format: 'lajolla' (one transponder, the Wave Glider column files) or 'gnatss' (a "
+            "GNATSS configuration with pxp_tt + POS_FREED_TRANS_TWTT or its Level-2 CSV).",
+        ),
+    ] = "lajolla",
+    pxp_tt: Annotated[Path | None, typer.Option("--pxp-tt", help="gnatss: pxp_tt travel times (us).")] = None,
+    positions: Annotated[
+        Path | None, typer.Option("--positions", help="gnatss: POS_FREED_TRANS_TWTT transducer positions.")
+    ] = None,
+    level2: Annotated[
+        Path | None, typer.Option("--level2", help="gnatss: Level-2 per-reply CSV (gps_solution.csv).")
+    ] = None,
+    ssp: Annotated[
+        Path | None, typer.Option("--ssp", help="gnatss: sound-speed profile (depth, speed).")
+    ] = None,
+    antenna: Annotated[
+        Path | None,
+        typer.Option(
+            "--antenna", help="gnatss: GPS_POS_FREED antenna positions (with --pxp-tt, --attitude)."
+        ),
+    ] = None,
+    attitude: Annotated[
+        Path | None, typer.Option("--attitude", help="gnatss: roll, pitch, heading file (deg) for --antenna.")
+    ] = None,
+    deletions: Annotated[
+        Path | None, typer.Option("--deletions", help="gnatss: deletion file (deletns.dat or deletions.csv).")
+    ] = None,
+    method: Annotated[
+        str, typer.Option(help="gnatss: 'oceanloc' (its estimator) or 'gnatss' (GNATSS's own settings).")
+    ] = "oceanloc",
+    solution: Annotated[
+        str, typer.Option(help="gnatss: 'independent' positions or the array's 'common_shift'.")
+    ] = "independent",
+    csv_dir: Annotated[
+        Path | None,
+        typer.Option("--csv", help="gnatss: write residuals/outliers/deletions CSVs (GNATSS columns) here."),
+    ] = None,
+    netcdf: Annotated[
+        Path | None,
+        typer.Option("--netcdf", help="gnatss: write the solution, covariance, iterations (NetCDF)."),
     ] = None,
     sound_speed: Annotated[
         list[float] | None,
@@ -77,7 +134,19 @@ def gnssa(
     ] = None,
     show_exclusions: Annotated[bool, typer.Option(help="List every excluded ping with its reason.")] = False,
 ) -> None:
-    """Robust MAP position of a seafloor transponder from GNSS-Acoustic surveys, and their spread."""
+    """Robust MAP position of a seafloor transponder from GNSS-Acoustic surveys, and their spread; or of a
+    transponder array from a GNATSS-format survey (--format gnatss)."""
+    if fmt not in ("lajolla", "gnatss"):
+        raise ConfigError(f"--format must be 'lajolla' or 'gnatss', got {fmt!r}")
+    if fmt == "gnatss":
+        if files and len(files) > 1:
+            raise ConfigError("--format gnatss takes one configuration YAML")
+        loc = process_gnatss_survey(
+            files[0] if files else None, pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp,
+            deletions=deletions, antenna=antenna, attitude=attitude, method=method, solution=solution,
+        )  # fmt: skip
+        _report_gnatss(loc, json_path, csv_dir, netcdf, show_exclusions)
+        return
     paths = list(files) if files else lajolla_paths()
     if not files:
         err_console.print(f"no file given: using the {len(paths)} packaged La Jolla surveys")
@@ -110,6 +179,30 @@ def gnssa(
         err_console.print(f"wrote {len(written)} figures to {escape(str(figures))}")
     if json_path is not None:
         write_json(json_path, res, cli_provenance(inputs=res.paths))
+
+
+def _report_gnatss(
+    loc: GnatssLocalization, json_path: Path | None, csv_dir: Path | None, netcdf: Path | None, show: bool
+) -> None:
+    """Tables, then the files asked for (JSON record with pings, GNATSS-column CSVs, NetCDF)."""
+    if loc.extra.get("qc"):
+        err_console.print(escape(str(loc.extra["qc"])), highlight=False)
+    console.print(tables.gnatss_positions_table(loc))
+    console.print(tables.gnatss_geodetic_table(loc))
+    for line in tables.gnatss_summary_lines(loc):
+        console.print(escape(line), highlight=False)
+    if show:
+        for t, k, r, x in zip(loc.t_s, loc.transponder, loc.reason, loc.excluded, strict=True):
+            if x:
+                console.print(escape(f"{t:.3f} s {loc.ids[int(k)]}: {r}"), highlight=False)
+    prov = cli_provenance(inputs=list(loc.inputs))
+    if csv_dir is not None:
+        written = loc.write_csvs(ensure_dir(csv_dir))
+        err_console.print(f"wrote {len(written)} CSV files to {escape(str(csv_dir))}")
+    if netcdf is not None:
+        write_netcdf(netcdf, loc.to_dataset(), prov)
+    if json_path is not None:
+        write_json(json_path, loc, prov)
 
 
 GpsLogArg = Annotated[Path, typer.Argument(help="NMEA 0183 GPS log (GGA with RMC or ZDA dates).")]

@@ -256,7 +256,7 @@ def solve_map(
         resid, jac = problem.evaluate(xa, active)
         info_a = prior_info[active]
         dev = xa - mean[active]
-        normal = np.einsum("bni,bnj->bij", jac, jac) + info_a
+        normal = _gram(jac) + info_a
         grad = np.einsum("bni,bn->bi", jac, resid) - np.einsum("bij,bj->bi", info_a, dev)
         lam_a = lam[active]
         damped = normal + lam_a[:, None, None] * (normal * np.eye(dim))
@@ -275,7 +275,7 @@ def solve_map(
         active = active[~done]
 
     resid, jac = problem.evaluate(x, all_rows)
-    information = np.einsum("bni,bnj->bij", jac, jac) + prior_info
+    information = _gram(jac) + prior_info
     covariance = np.linalg.inv(information)
     covariance = 0.5 * (covariance + np.swapaxes(covariance, -1, -2))
     # A measurement that disagrees with the estimate but has no derivative there (a range from a sensor
@@ -305,6 +305,20 @@ def solve_map(
         status=status,
         message=message.astype(str),
     )
+
+
+_BLAS_GRAM_SIZE = 50_000
+"""Rows times unknowns of one problem from which ``J^T J`` is formed by BLAS, element by element."""
+
+
+def _gram(jac: FloatArray) -> FloatArray:
+    """``J^T J`` per batch element, ``(b, d, d)``: by BLAS element by element for large problems (a GNSS-A
+    survey of tens of thousands of rows, where einsum is several times slower), by one einsum for small
+    ones (Monte Carlo batches of many small problems). The choice depends on one problem's size only, so
+    a problem's numbers do not depend on the batch it is solved in."""
+    if jac.shape[1] * jac.shape[2] >= _BLAS_GRAM_SIZE:
+        return np.stack([a.T @ a for a in jac])
+    return np.einsum("bni,bnj->bij", jac, jac)
 
 
 def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:

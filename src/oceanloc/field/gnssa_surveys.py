@@ -20,6 +20,12 @@ from pathlib import Path
 
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.gnssa import GnssaOptions, GnssaResult, localize_gnssa
+from oceanloc.estimation.gnssa_array import (
+    ArrayGeometry,
+    GnssaArrayOptions,
+    GnssaArrayResult,
+    localize_gnssa_array,
+)
 from oceanloc.field.repeatability import SurveySpread, survey_spread
 from oceanloc.geo.plate_motion import (
     ITRF2014_POLES_MAS_YR,
@@ -29,6 +35,8 @@ from oceanloc.geo.plate_motion import (
     plate_site_velocity,
 )
 from oceanloc.io.gnssa import GnssaSurvey, read_gnssa, survey_sound_speeds_mps
+from oceanloc.io.gnssa_array import GnssaArraySurvey
+from oceanloc.models.sound_profile import SoundSpeedProfile
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -64,7 +72,9 @@ class SiteVelocityChoice:
         }
 
 
-def choose_site_velocity(spec: str, surveys: Sequence[GnssaSurvey]) -> SiteVelocityChoice:
+def choose_site_velocity(
+    spec: str, surveys: Sequence[GnssaSurvey] | Sequence[GnssaArraySurvey]
+) -> SiteVelocityChoice:
     """The site velocity for ``spec`` (see the module docstring) at the surveys' location.
 
     Raises
@@ -142,8 +152,27 @@ class GnssaSurveys:
     def paths(self) -> list[str]:
         return [s.path for s in self.surveys]
 
+    def pings_record(self) -> dict[str, list]:
+        """Every ping of every survey: ``t_s`` (transmit time in the files' time base), ``transponder`` (the
+        survey's name: one transponder per file), ``residual_m`` (two-way path at the solution),
+        ``excluded`` and ``reason`` ("" for a used ping)."""
+        out: dict[str, list] = {"t_s": [], "transponder": [], "residual_m": [], "excluded": [], "reason": []}
+        for survey, res in zip(self.surveys, self.results, strict=True):
+            reasons = [""] * survey.n_pings
+            for x in res.exclusions:
+                reasons[x.index] = x.reason
+            out["t_s"] += [float(t) for t in survey.t_transmit_s]
+            out["transponder"] += [res.name] * survey.n_pings
+            out["residual_m"] += [float(r) for r in res.residual_m]
+            out["excluded"] += [not bool(u) for u in res.used]
+            out["reason"] += [
+                r if not u and r else ("excluded" if not u else "")
+                for r, u in zip(reasons, res.used, strict=True)
+            ]
+        return out
+
     def to_record(self) -> dict:
-        """Plain JSON-ready data: one entry per survey, the site velocity and the spreads."""
+        """Plain JSON-ready data: one entry per survey, the site velocity, the spreads and every ping."""
         spread = None
         if self.spread is not None and self.as_surveyed is not None:
             spread = self.spread.to_record()
@@ -152,6 +181,7 @@ class GnssaSurveys:
             "surveys": [r.to_record() for r in self.results],
             "site_velocity": self.site_velocity.to_record(),
             "spread": spread,
+            "pings": self.pings_record(),
         }
 
 
@@ -190,4 +220,97 @@ def process_gnssa_surveys(
         as_surveyed = survey_spread(list(results))
     return GnssaSurveys(
         surveys=surveys, results=results, site_velocity=choice, spread=spread, as_surveyed=as_surveyed
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaArraySurveys:
+    """Several GNSS-A surveys of one transponder array, each solved, and the agreement of the array's
+    centre across them (the usual GNSS-A observable: its motion is the site's).
+
+    Attributes
+    ----------
+    surveys : tuple of GnssaArraySurvey
+    results : tuple of GnssaArrayResult
+        One solution per survey, in the order given.
+    site_velocity : SiteVelocityChoice
+    spread : SurveySpread or None
+        Agreement of the centres at one epoch, moved by the site velocity (None for a single survey).
+    as_surveyed : SurveySpread or None
+        The same without moving them.
+    """
+
+    surveys: tuple[GnssaArraySurvey, ...]
+    results: tuple[GnssaArrayResult, ...]
+    site_velocity: SiteVelocityChoice
+    spread: SurveySpread | None
+    as_surveyed: SurveySpread | None
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: one entry per survey, the site velocity and the centre's spreads."""
+        spread = None
+        if self.spread is not None and self.as_surveyed is not None:
+            spread = self.spread.to_record()
+            spread["at_survey_epochs"] = self.as_surveyed.to_record()
+        return {
+            "surveys": [r.to_record() for r in self.results],
+            "site_velocity": self.site_velocity.to_record(),
+            "centre_spread": spread,
+        }
+
+
+def process_gnssa_array_surveys(
+    surveys: Sequence[GnssaArraySurvey],
+    options: GnssaArrayOptions,
+    *,
+    profiles: Sequence[SoundSpeedProfile | None] = (),
+    geometry: ArrayGeometry | None = None,
+    site_velocity: str = "auto",
+) -> GnssaArraySurveys:
+    """Solve each array survey (:func:`~oceanloc.estimation.gnssa_array.localize_gnssa_array`) and compare
+    the array's centre across them at one epoch (:func:`~oceanloc.field.repeatability.survey_spread`).
+
+    Parameters
+    ----------
+    surveys : sequence of GnssaArraySurvey
+        Surveys of one array, in the same ENU frame (the same origin).
+    options : GnssaArrayOptions
+    profiles : sequence of SoundSpeedProfile or None
+        One profile per survey, one for all, or none.
+    geometry : ArrayGeometry, optional
+        The array's geometry (for the ``common_shift`` solution).
+    site_velocity : str
+        As in :func:`process_gnssa_surveys`.
+
+    Raises
+    ------
+    ConfigError
+        No survey, a profile count that is neither 0, 1 nor one per survey, or surveys whose transponders
+        or origins differ.
+    """
+    if not surveys:
+        raise ConfigError("no GNSS-A array survey to process")
+    if len(profiles) not in (0, 1, len(surveys)):
+        raise ConfigError(f"give one sound-speed profile, one per survey ({len(surveys)}) or none")
+    ids = {s.transponder_ids for s in surveys}
+    if len(ids) > 1:
+        raise ConfigError("the surveys name different transponders: the array centre would not be comparable")
+    origins = {s.origin for s in surveys}
+    if len(origins) > 1:
+        raise ConfigError("the surveys have different ENU origins: convert them to one frame first")
+    per_survey = (
+        list(profiles) * len(surveys) if len(profiles) == 1 else list(profiles) or [None] * len(surveys)
+    )
+    choice = choose_site_velocity(site_velocity, surveys)
+    results = tuple(
+        localize_gnssa_array(s, options, profile=p, geometry=geometry)
+        for s, p in zip(surveys, per_survey, strict=True)
+    )
+    spread = as_surveyed = None
+    if len(results) >= 2:
+        centres = [r.centre for r in results]
+        spread = survey_spread(list(centres), choice.velocity)
+        as_surveyed = survey_spread(list(centres))
+    return GnssaArraySurveys(
+        surveys=tuple(surveys), results=results, site_velocity=choice, spread=spread, as_surveyed=as_surveyed
     )

@@ -16,6 +16,7 @@ from rich.table import Table
 
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.estimation.gnssa import GnssaResult, gnssa_epoch_utc
+from oceanloc.field.gnatss_input import GnatssLocalization
 from oceanloc.field.gnssa_surveys import GnssaSurveys
 from oceanloc.field.range_logs import LogLocalization, NoiseAnalysis
 from oceanloc.field.repeatability import SurveySpread
@@ -341,3 +342,45 @@ def waypoint_line(w: Waypoint) -> str:
             else ""
         )
     )
+
+
+def gnatss_positions_table(loc: GnatssLocalization) -> Table:
+    """An array's transponders: ENU about the array centre, 1-sigma and replies used."""
+    table = _table(f"GNSS-A array ({escape(loc.method)}, {escape(loc.solution)}): ENU about the array centre")
+    for col in ("transponder", "E m", "N m", "U m", "1σ E/N/U mm", "replies used"):
+        table.add_column(col, justify="left" if col == "transponder" else "right")
+    sig = 1e3 * loc.sigma_enu_m
+    for k, tid in enumerate(loc.ids):
+        e, n, u = loc.positions_enu_m[k]
+        used = int(np.sum(~loc.excluded & (loc.transponder == k)))
+        sig_text = f"{sig[k, 0]:.1f}/{sig[k, 1]:.1f}/{sig[k, 2]:.1f}"
+        table.add_row(escape(tid), f"{e:+.4f}", f"{n:+.4f}", f"{u:+.4f}", sig_text, str(used))
+    return table
+
+
+def gnatss_geodetic_table(loc: GnatssLocalization) -> Table:
+    """An array's transponders as WGS84 latitude, longitude and ellipsoidal height."""
+    table = _table("GNSS-A array: geodetic positions (WGS84)")
+    for col in ("transponder", "latitude °", "longitude °", "height m"):
+        table.add_column(col, justify="left" if col == "transponder" else "right")
+    for k, tid in enumerate(loc.ids):
+        lat, lon, h = loc.positions_geodetic[k]
+        table.add_row(escape(tid), f"{lat:.8f}", f"{lon:.8f}", f"{h:.4f}")
+    return table
+
+
+def gnatss_summary_lines(loc: GnatssLocalization) -> list[str]:
+    """Replies used and excluded (by reason), convergence, sound speed."""
+    reasons: dict[str, int] = {}
+    for r, x in zip(loc.reason, loc.excluded, strict=True):
+        if x:
+            key = r.split(":")[0]
+            reasons[key] = reasons.get(key, 0) + 1
+    by = ", ".join(f"{k}: {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+    speeds = "/".join(f"{c:.3f}" for c in loc.sound_speed_mps)
+    return [
+        f"{int((~loc.excluded).sum())} of {loc.excluded.size} replies used"
+        + (f"; excluded: {by}" if by else ""),
+        f"converged: {'yes' if loc.converged else 'no'} after {len(loc.iterations)} iterations; "
+        f"sound speed {speeds} m/s",
+    ]

@@ -1,0 +1,1 @@
+"""A small synthetic GNSS-A array survey in GNATSS's formats (see README.md)."""

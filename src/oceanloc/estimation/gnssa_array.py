@@ -1,0 +1,1267 @@
+"""GNSS-A localization of a transponder array: any number of transponders, partial replies, lever arm,
+attitude, sound-speed profile; independent positions or the array's common shift.
+
+Entry point: :func:`localize_gnssa_array` (survey: :class:`~oceanloc.io.gnssa_array.GnssaArraySurvey`,
+options: :class:`GnssaArrayOptions`, preset :func:`gnatss_like_options`) -> :class:`GnssaArrayResult`.
+
+Model, per reply ``o`` of ping ``i`` from transponder ``j`` (transducer ``a_i = A_i + R_i l`` at transmit,
+``b_o = B_o + R_o l`` at receive, antenna positions ``A``, ``B``, body-to-ENU rotations ``R``, lever arm
+``l``)::
+
+    TWTT_o - tau_j = P_o / c(t_o),   P_o = c_ref [T(p_j, a_i) + T(p_j, b_o)] + g . G_o
+
+- ``T`` is the one-way travel time of a leg through the sound-speed profile
+  (:mod:`oceanloc.models.sound_profile`): ``straight`` (``L / c_ref``, no profile), ``harmonic`` (``L h_j``
+  with the harmonic-mean slowness ``h_j`` between the surface and transponder ``j``'s initial depth, fixed:
+  what GNATSS does) or ``ray`` (``L h(z_a, z_p) + delta``: the straight leg at the harmonic mean between
+  the leg's own end depths, exact in the transponder's depth, plus the ray-bending correction ``delta``
+  tabulated by :func:`~oceanloc.models.sound_profile.bending_table` and re-evaluated between solves; its
+  derivative, below 1e-4 of the straight leg's, is left out of the Jacobian, so the estimate is the exact
+  ray-traced one and only the convergence rate is affected);
+- ``c(t)`` is the sound-speed scale, piecewise linear in time (knots with an exponentially correlated prior
+  centred on ``c_ref``, the profile's harmonic mean): ``c(t) / c_ref - 1`` is the estimated relative
+  correction to the whole profile (a uniform slowness scale leaves the rays' paths unchanged, so the
+  ray-traced model stays exact under it);
+- ``g . G_o`` is the horizontal slowness gradient term of
+  :func:`~oceanloc.models.acoustics.gradient_path_m2` on both legs (shared by the transponders).
+
+Unknowns: the transponders (``3J``; or the common shift ``s`` of a fixed geometry, ``p_j = q_j + s``), the
+gradient, the lever arm (a calibration option, with its prior; otherwise kept as an unknown with the
+survey's lever-arm covariance as its prior whenever that is not zero, so the lever arm's uncertainty,
+common to every ping, enters the covariance as it should instead of per ping), then the knots.
+
+Noise: per ping the replies share the transmit position's error, so each ping's replies are whitened
+together with the Cholesky factor of ``V C_tx V^T + diag(u^T C_rx u + s^2 + beta^2 tan^2)`` (``V`` the
+transmit legs' unit vectors): the GNSS covariances, full 3x3, projected on the legs (journal eqs. 46-52),
+plus the path noise ``s`` and the far-ping term ``beta tan(incidence)`` estimated by maximum likelihood,
+as in :mod:`oceanloc.estimation.gnssa`.
+
+Robustness and uncertainty as in :mod:`oceanloc.estimation.gnssa`: a robust first fit per transponder
+(on at most 400 of its replies, spread over the survey) screens every reply for gross travel times;
+the outlier rule removes the replies with the largest normalized residual above ``outlier_threshold``
+(up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand solves); a delete-one-block
+jackknife over contiguous time blocks (linearized at the solution: one normal-matrix downdate per
+block) and the survey-wide GNSS error (common to the whole array) are added to the formal covariance.
+Everything is vectorized over replies; the only Python loops run over transponders, rounds and blocks.
+
+Use::
+
+    survey = array_survey_from_track(...)          # or array_survey_from_transducers / _from_gnssa
+    result = localize_gnssa_array(survey, GnssaArrayOptions(), profile=SoundSpeedProfile(...))
+    result.positions_enu_m, result.covariance_m2, result.positions_geodetic   # (J, 3), (3J, 3J), (J, 3)
+    result.residual_m[result.used], result.exclusions, result.iterations
+    result.speed_scale(t), result.gradient_per_km                             # the profile correction
+    localize_gnssa_array(survey, gnatss_like_options(residual_limit_m=...), profile=...)  # GNATSS's way
+    localize_gnssa_array(survey, GnssaArrayOptions(solution="common_shift"), profile=...,
+                         geometry=ArrayGeometry(positions_enu_m=previous_campaign_enu_m))
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from oceanloc._typing import BoolArray, FloatArray, IntArray
+from oceanloc.errors import ConfigError, DataError
+from oceanloc.estimation.gnssa import (
+    _positive_part,
+    _variance_components,
+    gnssa_epoch_utc,
+    hat_basis,
+    robust_first_fit,
+)
+from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
+from oceanloc.geo.enu import enu_to_geodetic
+from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S
+from oceanloc.io.gnssa_array import GnssaArraySurvey
+from oceanloc.models.acoustics import gradient_path_jacobian, gradient_path_m2
+from oceanloc.models.sound_profile import BendingTable, SoundSpeedProfile, bending_table
+
+ACOUSTIC_MODELS: tuple[str, ...] = ("auto", "straight", "harmonic", "ray")
+SOLUTIONS: tuple[str, ...] = ("independent", "common_shift")
+OUTLIER_RULES: tuple[str, ...] = ("normalized", "residual")
+_ROBUST_FIT_REPLIES = 400
+"""Replies per transponder the robust first fit uses (evenly spread); the screen then covers all."""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaArrayOptions:
+    """Settings of :func:`localize_gnssa_array` (defaults: oceanloc's own; see :func:`gnatss_like_options`).
+
+    Attributes
+    ----------
+    solution : str
+        ``independent`` (every transponder's position) or ``common_shift`` (one shift of the geometry
+        given to :func:`localize_gnssa_array`).
+    acoustic_model : str
+        ``auto`` (``ray`` with a profile, ``straight`` without), ``straight``, ``harmonic`` or ``ray``.
+    sound_speed_mps : float or None
+        Reference speed ``c_ref``; None: the profile's harmonic mean from the surface to the transponders'
+        mean initial depth (1500 without a profile).
+    transponder_speeds_mps : tuple of float or None
+        ``harmonic`` model only: the fixed harmonic-mean speed of each transponder, m/s (instead of the
+        profile's).
+    estimate_sound_speed : bool
+        Estimate the sound-speed scale ``c(t)`` (knots); False fixes ``c = c_ref``.
+    sigma_sound_speed_mps, knot_spacing_s, min_pings_per_knot, sound_speed_correlation_s
+        As in :class:`~oceanloc.estimation.gnssa.GnssaOptions`.
+    estimate_gradient : bool
+    sigma_gradient_per_km : float
+    estimate_lever_arm : bool
+        Calibrate the lever arm (needs attitude variation, e.g. circling with changing heading).
+    sigma_lever_arm_m : float
+        Prior 1-sigma of each lever-arm component when calibrating and the survey gives no covariance.
+    estimate_noise : bool
+        Estimate ``sigma_path`` and ``beta`` (variance components); False keeps ``sigma_path_m``.
+    sigma_path_m : float
+        Path noise (timing, unmodelled propagation) before it is estimated, or fixed, metres two-way.
+    range_dependent_weights : bool
+        Estimate the far-ping term ``beta tan(incidence)``.
+    outlier_rule : str
+        ``normalized`` (``|r| / sigma > outlier_threshold``) or ``residual`` (GNATSS's: ``|r| >
+        residual_limit_m``, all at once per round).
+    outlier_threshold : float
+    residual_limit_m : float
+        Two-way path residual limit of the ``residual`` rule, metres.
+    max_outlier_fraction : float
+    prescreen, prescreen_sigmas, gross_error_m, max_gross_fraction
+        The gross-error pre-screen of :mod:`oceanloc.estimation.gnssa`, per transponder.
+    sigma_position_prior_m : float
+        Position prior around the initial positions, metres.
+    surface_height_m : float or None
+        ENU height of the sea surface (profile depth 0); None: the mean transducer height at transmit.
+    jackknife_blocks : int
+        Time blocks of the linearized delete-one-block jackknife (0: off).
+    gnss_common_mode : bool
+        Add the survey-wide GNSS error to the covariance (common to every transponder).
+    max_rounds : int
+        Largest number of outlier rounds.
+    """
+
+    solution: str = "independent"
+    acoustic_model: str = "auto"
+    sound_speed_mps: float | None = None
+    transponder_speeds_mps: tuple[float, ...] | None = None
+    estimate_sound_speed: bool = True
+    sigma_sound_speed_mps: float = 3.0
+    knot_spacing_s: float | None = 900.0
+    min_pings_per_knot: int = 40
+    sound_speed_correlation_s: float = 1800.0
+    estimate_gradient: bool = True
+    sigma_gradient_per_km: float = 1e-3
+    estimate_lever_arm: bool = False
+    sigma_lever_arm_m: float = 1.0
+    estimate_noise: bool = True
+    sigma_path_m: float = 0.05
+    range_dependent_weights: bool = True
+    outlier_rule: str = "normalized"
+    outlier_threshold: float = 3.0
+    residual_limit_m: float = 1.0
+    max_outlier_fraction: float = 0.2
+    prescreen: bool = True
+    prescreen_sigmas: float = 8.0
+    gross_error_m: float = 5.0
+    max_gross_fraction: float = 0.4
+    sigma_position_prior_m: float = 1000.0
+    surface_height_m: float | None = None
+    jackknife_blocks: int = 10
+    gnss_common_mode: bool = True
+    max_rounds: int = 200
+
+    def __post_init__(self) -> None:
+        if self.solution not in SOLUTIONS:
+            raise ConfigError(f"solution {self.solution!r} is none of {', '.join(SOLUTIONS)}")
+        if self.acoustic_model not in ACOUSTIC_MODELS:
+            raise ConfigError(
+                f"acoustic_model {self.acoustic_model!r} is none of {', '.join(ACOUSTIC_MODELS)}"
+            )
+        if self.outlier_rule not in OUTLIER_RULES:
+            raise ConfigError(f"outlier_rule {self.outlier_rule!r} is none of {', '.join(OUTLIER_RULES)}")
+        if self.sound_speed_mps is not None and not 1300.0 <= self.sound_speed_mps <= 1700.0:
+            raise ConfigError(f"sound speed {self.sound_speed_mps} m/s is outside [1300, 1700]")
+        positive = {
+            "sigma_sound_speed_mps": self.sigma_sound_speed_mps,
+            "sigma_gradient_per_km": self.sigma_gradient_per_km,
+            "sigma_lever_arm_m": self.sigma_lever_arm_m,
+            "sigma_path_m": self.sigma_path_m,
+            "residual_limit_m": self.residual_limit_m,
+            "gross_error_m": self.gross_error_m,
+            "sigma_position_prior_m": self.sigma_position_prior_m,
+        }
+        for name, value in positive.items():
+            if not (value > 0.0 and np.isfinite(value)):
+                raise ConfigError(f"{name} must be a positive number, got {value}")
+        if self.outlier_threshold <= 1.0:
+            raise ConfigError(f"outlier_threshold must exceed 1, got {self.outlier_threshold}")
+        if not 0.0 <= self.max_outlier_fraction < 0.5:
+            raise ConfigError("max_outlier_fraction must be in [0, 0.5)")
+        if not 0.0 <= self.max_gross_fraction < 0.5:
+            raise ConfigError("max_gross_fraction must be in [0, 0.5)")
+        if self.jackknife_blocks == 1 or self.jackknife_blocks < 0:
+            raise ConfigError("jackknife_blocks must be 0 (off) or at least 2")
+        if self.knot_spacing_s is not None and self.knot_spacing_s <= 0.0:
+            raise ConfigError("knot_spacing_s must be positive (or None for one constant speed)")
+
+
+def gnatss_like_options(**overrides: object) -> GnssaArrayOptions:
+    """GNATSS's settings: a fixed harmonic-mean speed per transponder from the profile, no sound-speed,
+    gradient or noise estimation, a TWTT sigma of 1e-5 s (GNATSS's ``travel_times_variance`` 1e-10 s^2,
+    about 1.5 cm of two-way path), its residual outlier limit, no pre-screen, jackknife or common-mode
+    term. Keyword arguments override any field (e.g. ``residual_limit_m``, ``transponder_speeds_mps``)."""
+    base = GnssaArrayOptions(
+        acoustic_model="harmonic",
+        estimate_sound_speed=False,
+        estimate_gradient=False,
+        estimate_noise=False,
+        sigma_path_m=1500.0 * 1e-5,
+        range_dependent_weights=False,
+        outlier_rule="residual",
+        residual_limit_m=1.0,
+        prescreen=False,
+        jackknife_blocks=0,
+        gnss_common_mode=False,
+    )
+    return dataclasses.replace(base, **overrides)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ArrayGeometry:
+    """A transponder array's geometry from a prior campaign, for the ``common_shift`` solution.
+
+    Attributes
+    ----------
+    positions_enu_m : (J, 3) float
+        Transponder positions in the survey's ENU frame (the shift is estimated relative to these), metres.
+    """
+
+    positions_enu_m: FloatArray
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReplyExclusion:
+    """One excluded reply and why."""
+
+    reply: int
+    ping: int
+    transponder: str
+    line: int
+    time_s: float
+    reason: str
+    residual_m: float
+
+    def __str__(self) -> str:
+        return f"line {self.line} (t={self.time_s:.1f} s, {self.transponder}): {self.reason}"
+
+    def to_record(self) -> dict:
+        return {
+            "reply": self.reply,
+            "ping": self.ping,
+            "transponder": self.transponder,
+            "line": self.line,
+            "time_s": float(self.time_s),
+            "reason": self.reason,
+            "residual_m": float(self.residual_m),
+        }
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ArrayIteration:
+    """One solve of the outer loop: what was used and what came out."""
+
+    round: int
+    replies_used: int
+    sigma_path_m: float
+    beta_m: float
+    cost: float
+    map_iterations: int
+    position_change_m: float
+    excluded: int
+
+    def to_record(self) -> dict:
+        return {k: (float(v) if isinstance(v, float) else v) for k, v in dataclasses.asdict(self).items()}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ArrayCentre:
+    """The array's centre from one survey, in the form :func:`oceanloc.field.repeatability.survey_spread`
+    takes (``position_enu_m``, ``sigma_enu_m``, ``epoch_s``)."""
+
+    position_enu_m: FloatArray
+    covariance_m2: FloatArray
+    epoch_s: float
+
+    @property
+    def sigma_enu_m(self) -> FloatArray:
+        return np.sqrt(np.diag(self.covariance_m2))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GnssaArrayResult:
+    """Localization of an array from one survey (:func:`localize_gnssa_array`).
+
+    Attributes
+    ----------
+    name : str
+    solution : str
+        ``independent`` or ``common_shift``.
+    acoustic_model : str
+        The travel-time model used (``straight``, ``harmonic``, ``ray``).
+    transponder_ids : tuple of str
+    positions_enu_m : (J, 3) float
+        Transponder positions, ENU about the survey origin, metres.
+    covariance_m2 : (3J, 3J) float
+        Reported covariance of the stacked positions (formal + positive part of jackknife - formal + GNSS
+        common mode).
+    covariance_formal_m2 : (3J, 3J) float
+    covariance_jackknife_m2 : (3J, 3J) float or None
+    covariance_gnss_m2 : (3J, 3J) float
+    positions_geodetic : (J, 3) float or None
+        Latitude, longitude (deg), ellipsoidal height (m).
+    shift_enu_m : (3,) float or None
+        The common shift (``common_shift`` solution), metres.
+    shift_covariance_m2 : (3, 3) float or None
+    centre : ArrayCentre
+        Mean of the positions and its covariance.
+    epoch_s : float
+        Mean transmit time of the used pings.
+    reference_speed_mps : float
+        ``c_ref``.
+    knot_times_s, sound_speed_knots_mps, sound_speed_knot_sigma_mps : (K,) float
+        Estimated sound speed scale ``c(t)`` at its knots and its 1-sigma (empty when fixed).
+    sound_speed_mps : float
+        Mean of ``c(t)`` over the used replies.
+    speed_correction_ppm : float
+        ``1e6 (mean c / c_ref - 1)``: the estimated correction to the profile as a whole.
+    gradient_per_km, gradient_sigma_per_km : (2,) float
+        Horizontal slowness gradient (east, north) and 1-sigma (zeros when not estimated).
+    lever_arm_body_m : (3,) float
+        Lever arm used (estimated when calibrating), forward, starboard, down, metres.
+    lever_arm_covariance_m2 : (3, 3) float
+        Its posterior covariance (the prior's when not estimated).
+    lever_arm_estimated : bool
+    lever_arm_prior_sigma_m : (3,) float
+        The lever arm's prior 1-sigma (zeros when it is known exactly): compared with the posterior, it
+        says how much the survey's geometry determined it (:attr:`lever_arm_determined`).
+    reply_ping, reply_transponder : (m,) int
+        Copied from the survey, to read the per-reply arrays.
+    residual_m : (m,) float
+        ``c0 (TWTT - tau - model)`` for every reply, two-way path metres (``c0 = c_ref``).
+    residual_s : (m,) float
+        The same in seconds of travel time.
+    sigma_m : (m,) float
+        Per-reply 1-sigma of that residual (marginal), metres.
+    used : (m,) bool
+    exclusions : tuple of ReplyExclusion
+    iterations : tuple of ArrayIteration
+    sigma_path_m, beta_m, residual_rms_m : float
+    converged : bool
+    time_origin_unix_s : float
+        Unix time of the survey's time 0 (for :attr:`epoch_s` as UTC).
+    status : str
+        ``ok`` or what went wrong.
+    """
+
+    name: str
+    solution: str
+    acoustic_model: str
+    transponder_ids: tuple[str, ...]
+    positions_enu_m: FloatArray
+    covariance_m2: FloatArray
+    covariance_formal_m2: FloatArray
+    covariance_jackknife_m2: FloatArray | None
+    covariance_gnss_m2: FloatArray
+    positions_geodetic: FloatArray | None
+    shift_enu_m: FloatArray | None
+    shift_covariance_m2: FloatArray | None
+    centre: ArrayCentre
+    epoch_s: float
+    reference_speed_mps: float
+    knot_times_s: FloatArray
+    sound_speed_knots_mps: FloatArray
+    sound_speed_knot_sigma_mps: FloatArray
+    sound_speed_mps: float
+    speed_correction_ppm: float
+    gradient_per_km: FloatArray
+    gradient_sigma_per_km: FloatArray
+    lever_arm_body_m: FloatArray
+    lever_arm_covariance_m2: FloatArray
+    lever_arm_estimated: bool
+    lever_arm_prior_sigma_m: FloatArray
+    reply_ping: IntArray
+    reply_transponder: IntArray
+    residual_m: FloatArray
+    residual_s: FloatArray
+    sigma_m: FloatArray
+    used: BoolArray
+    exclusions: tuple[ReplyExclusion, ...]
+    iterations: tuple[ArrayIteration, ...]
+    sigma_path_m: float
+    beta_m: float
+    residual_rms_m: float
+    converged: bool
+    time_origin_unix_s: float
+    status: str = "ok"
+
+    @property
+    def sigma_enu_m(self) -> FloatArray:
+        """1-sigma of each transponder's (E, N, U), ``(J, 3)`` metres."""
+        return np.sqrt(np.diag(self.covariance_m2)).reshape(-1, 3)
+
+    @property
+    def lever_arm_determined(self) -> BoolArray:
+        """Per lever-arm component: calibrated, and its posterior sigma under half its prior sigma (the
+        survey's geometry, not the prior, determined it)."""
+        post = np.sqrt(np.diag(self.lever_arm_covariance_m2))
+        return self.lever_arm_estimated & (post < 0.5 * self.lever_arm_prior_sigma_m)
+
+    def speed_scale(self, t_s: FloatArray | float) -> FloatArray:
+        """The estimated correction to the profile at times ``t_s``: ``c(t) / c_ref``, by which every speed
+        of the given profile is to be multiplied (1 when the speed was fixed)."""
+        t = np.asarray(t_s, dtype=float)
+        if self.knot_times_s.size == 0:
+            return np.ones_like(t)
+        if self.knot_times_s.size == 1:
+            return np.full_like(t, self.sound_speed_knots_mps[0] / self.reference_speed_mps)
+        return np.interp(t, self.knot_times_s, self.sound_speed_knots_mps) / self.reference_speed_mps
+
+    def position_covariance_m2(self, j: int) -> FloatArray:
+        """The (3, 3) covariance of transponder ``j``."""
+        return self.covariance_m2[3 * j : 3 * j + 3, 3 * j : 3 * j + 3]
+
+    def to_record(self) -> dict:
+        """Plain JSON-ready data: per transponder the position (ENU and geodetic) and 1-sigma, the shift,
+        the centre, the sound-speed correction, the lever arm, the noise and the exclusions."""
+        sig = self.sigma_enu_m
+        transponders = []
+        for j, tid in enumerate(self.transponder_ids):
+            e, n, u = (float(v) for v in self.positions_enu_m[j])
+            entry = {
+                "id": tid,
+                "e_m": e,
+                "n_m": n,
+                "u_m": u,
+                "sigma_e_m": float(sig[j, 0]),
+                "sigma_n_m": float(sig[j, 1]),
+                "sigma_u_m": float(sig[j, 2]),
+                "lat_deg": None,
+                "lon_deg": None,
+                "h_m": None,
+                "replies_used": int(np.sum(self.used & (self.reply_transponder == j))),
+            }
+            if self.positions_geodetic is not None:
+                lat, lon, h = (float(v) for v in self.positions_geodetic[j])
+                entry.update(lat_deg=lat, lon_deg=lon, h_m=h)
+            transponders.append(entry)
+        centre_sig = self.centre.sigma_enu_m
+        return {
+            "file": self.name,
+            "solution": self.solution,
+            "acoustic_model": self.acoustic_model,
+            "epoch_utc": gnssa_epoch_utc(self.epoch_s + self.time_origin_unix_s - GPS_EPOCH_2020_UNIX_S),
+            "epoch_s": float(self.epoch_s),
+            "transponders": transponders,
+            "covariance_m2": self.covariance_m2.tolist(),
+            "shift_enu_m": None if self.shift_enu_m is None else [float(v) for v in self.shift_enu_m],
+            "shift_covariance_m2": None
+            if self.shift_covariance_m2 is None
+            else self.shift_covariance_m2.tolist(),
+            "centre_enu_m": [float(v) for v in self.centre.position_enu_m],
+            "centre_sigma_enu_m": [float(v) for v in centre_sig],
+            "reference_speed_mps": float(self.reference_speed_mps),
+            "sound_speed_mps": float(self.sound_speed_mps),
+            "speed_correction_ppm": float(self.speed_correction_ppm),
+            "knot_times_s": [float(v) for v in self.knot_times_s],
+            "sound_speed_knots_mps": [float(v) for v in self.sound_speed_knots_mps],
+            "sound_speed_knot_sigma_mps": [float(v) for v in self.sound_speed_knot_sigma_mps],
+            "gradient_e_per_km": float(self.gradient_per_km[0]),
+            "gradient_n_per_km": float(self.gradient_per_km[1]),
+            "lever_arm_body_m": [float(v) for v in self.lever_arm_body_m],
+            "lever_arm_sigma_m": [float(v) for v in np.sqrt(np.diag(self.lever_arm_covariance_m2))],
+            "lever_arm_estimated": bool(self.lever_arm_estimated),
+            "lever_arm_prior_sigma_m": [float(v) for v in self.lever_arm_prior_sigma_m],
+            "lever_arm_determined": [bool(v) for v in self.lever_arm_determined],
+            "replies_used": int(self.used.sum()),
+            "replies_excluded": len(self.exclusions),
+            "exclusions": [x.to_record() for x in self.exclusions],
+            "iterations": [it.to_record() for it in self.iterations],
+            "residual_rms_m": float(self.residual_rms_m),
+            "sigma_path_m": float(self.sigma_path_m),
+            "beta_m": float(self.beta_m),
+            "converged": bool(self.converged),
+            "status": self.status,
+        }
+
+
+# --------------------------------------------------------------------------------------------------
+# the measurement model
+
+
+@dataclass(slots=True)
+class _Acoustics:
+    """Travel-time model state of one solve: per-reply slowness weights and frozen bending corrections."""
+
+    model: str
+    c_ref: float
+    surface_m: float
+    profile: SoundSpeedProfile | None
+    fixed_slowness: FloatArray | None  # (J,) harmonic model
+    delta_tx_s: FloatArray  # (m,)
+    delta_rx_s: FloatArray  # (m,)
+    tables: list[BendingTable | None] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class ArrayProblem:
+    """The whitened least-squares model of one array survey (a :class:`WhitenedModel` of batch 1).
+
+    State layout (see :attr:`layout`): positions (``3J``) or the shift (3), gradient (2), lever arm (3),
+    knots (K).
+    """
+
+    survey: GnssaArraySurvey
+    twtt_s: FloatArray  # (m,) turn-around removed
+    basis: FloatArray  # (m, K)
+    geometry: FloatArray | None  # (J, 3) for the common shift
+    acoustics: _Acoustics
+    n_pos: int
+    gradient: bool
+    lever: bool
+    mask: BoolArray  # (m,)
+    slots: IntArray  # (n, S) reply index or -1
+    whiten: FloatArray  # (n, S, S) inverse Cholesky factors
+    _cache: dict = field(default_factory=dict)
+
+    def invalidate(self) -> None:
+        """Forget the cached evaluation (after the mask, the whitening or the bending changed)."""
+        self._cache.pop("key", None)
+
+    def fixed(self, key: str) -> FloatArray:
+        """Arrays that do not change during the solve, computed once (rotations per reply, one-hot)."""
+        if key not in self._cache:
+            s = self.survey
+            if key == "tx_rotation":
+                self._cache[key] = s.transmit_rotation[s.reply_ping]
+            elif key == "rows":
+                self._cache[key] = np.arange(s.n_replies)[:, None]
+            elif key == "cols":
+                self._cache[key] = 3 * s.reply_transponder[:, None] + np.arange(3)[None, :]
+            elif key == "valid":
+                self._cache[key] = self.slots >= 0
+            elif key == "slot_index":
+                self._cache[key] = np.where(self.slots >= 0, self.slots, 0)
+        return self._cache[key]
+
+    @property
+    def batch_size(self) -> int:
+        return 1
+
+    @property
+    def col_gradient(self) -> int:
+        return self.n_pos
+
+    @property
+    def col_lever(self) -> int:
+        return self.n_pos + 2 * int(self.gradient)
+
+    @property
+    def first_knot(self) -> int:
+        return self.col_lever + 3 * int(self.lever)
+
+    def positions(self, x: FloatArray) -> FloatArray:
+        """Transponder positions ``(J, 3)`` of the state ``x (d,)``."""
+        if self.geometry is not None:
+            return self.geometry + x[:3]
+        return x[: self.n_pos].reshape(-1, 3)
+
+    def lever_arm(self, x: FloatArray) -> FloatArray:
+        return x[self.col_lever : self.col_lever + 3] if self.lever else self.survey.lever_arm_body_m
+
+    def speed(self, x: FloatArray) -> FloatArray:
+        if self.basis.shape[1] == 0:
+            return np.full(self.twtt_s.shape, self.acoustics.c_ref)
+        return self.basis @ x[self.first_knot :]
+
+    def model(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Modelled TWTT ``(m,)`` (turn-around removed) and its Jacobian ``(m, d)``."""
+        s = self.survey
+        ac = self.acoustics
+        m = self.twtt_s.size
+        d = x.size
+        j_of = s.reply_transponder
+        pos = self.positions(x)[j_of]  # (m, 3)
+        a, b = self.legs(x)
+        jac_p = np.zeros((m, 3))
+        jac_l = np.zeros((m, 3))
+        time = np.zeros(m)
+        for leg, rot, delta in (
+            (a, self.fixed("tx_rotation"), ac.delta_tx_s),
+            (b, s.receive_rotation, ac.delta_rx_s),
+        ):
+            diff = leg - pos
+            length = np.sqrt(np.sum(diff * diff, axis=1))
+            unit = diff / np.maximum(length, 1e-9)[:, None]  # d L / d leg = unit = - d L / d p
+            if ac.model == "straight":
+                h = np.full(m, 1.0 / ac.c_ref)
+                d_p = -unit * h[:, None]
+                d_leg = unit * h[:, None]
+            elif ac.model == "harmonic":
+                assert ac.fixed_slowness is not None
+                h = ac.fixed_slowness[j_of]
+                d_p = -unit * h[:, None]
+                d_leg = unit * h[:, None]
+            else:
+                assert ac.profile is not None
+                za = ac.surface_m - leg[:, 2]
+                zb = ac.surface_m - pos[:, 2]
+                h = ac.profile.harmonic_slowness_spm(za, zb)
+                dz = np.where(np.abs(zb - za) < 1e-6, 1e-6, zb - za)
+                dh_dzb = (1.0 / ac.profile.speed_at_mps(np.nextafter(zb, -np.inf)) - h) / dz
+                dh_dza = (h - 1.0 / ac.profile.speed_at_mps(za)) / dz
+                d_p = -unit * h[:, None]
+                d_p[:, 2] -= length * dh_dzb  # z_b = surface - U_p
+                d_leg = unit * h[:, None]
+                d_leg[:, 2] -= length * dh_dza
+            time += length * h + delta
+            jac_p += d_p
+            if self.lever:
+                jac_l += np.matmul(d_leg[:, None, :], rot)[:, 0, :]
+        path = ac.c_ref * time
+        jac_path = np.zeros((m, d))
+        jac_p *= ac.c_ref
+        if self.lever:
+            jac_path[:, self.col_lever : self.col_lever + 3] = ac.c_ref * jac_l
+        if self.gradient:
+            g = 1e-3 * x[self.col_gradient : self.col_gradient + 2]
+            factor = gradient_path_m2(pos, a) + gradient_path_m2(pos, b)
+            path = path + factor @ g
+            jac_path[:, self.col_gradient : self.col_gradient + 2] = 1e-3 * factor
+            for leg, rot in ((a, self.fixed("tx_rotation")), (b, s.receive_rotation)):
+                gj = gradient_path_jacobian(pos, leg)
+                d_grad = g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]  # d/d transponder = -d/d leg
+                jac_p += d_grad
+                if self.lever:
+                    cl = self.col_lever
+                    jac_path[:, cl : cl + 3] -= np.matmul(d_grad[:, None, :], rot)[:, 0, :]
+        self._scatter_position(jac_path, jac_p)
+        c = self.speed(x)
+        model = path / c
+        jac = jac_path
+        jac /= c[:, None]
+        if self.basis.shape[1]:
+            jac[:, self.first_knot :] = (-path / (c * c))[:, None] * self.basis
+        return model, jac
+
+    def _scatter_position(self, jac: FloatArray, d_p: FloatArray) -> None:
+        """Put the per-reply position derivative ``(m, 3)`` in the state columns of its transponder."""
+        if self.geometry is not None:
+            jac[:, :3] = d_p
+            return
+        jac[self.fixed("rows"), self.fixed("cols")] = d_p
+
+    def legs(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Transducer positions at transmit (per reply) and at receive, ``(m, 3)`` each."""
+        if not self.lever:
+            if "legs" not in self._cache:
+                s = self.survey
+                self._cache["legs"] = (s.transmit_enu_m()[s.reply_ping], s.receive_enu_m())
+            return self._cache["legs"]
+        s = self.survey
+        lever = self.lever_arm(x)
+        return s.transmit_enu_m(lever)[s.reply_ping], s.receive_enu_m(lever)
+
+    def residual_m(self, x: FloatArray) -> FloatArray:
+        """``c_ref (TWTT - tau - model)`` of every reply, metres."""
+        return self.acoustics.c_ref * (self.twtt_s - self.model(x)[0])
+
+    def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
+        """Whitened residuals ``(1, n S)`` and Jacobian ``(1, n S, d)``; the last evaluation is cached
+        (the solver asks for the cost of a trial and then, once accepted, for its Jacobian)."""
+        xs = x[0]
+        key = xs.tobytes()
+        if self._cache.get("key") == key:
+            return self._cache["rw"], self._cache["jw"]
+        model, jac = self.model(xs)
+        c0 = self.acoustics.c_ref
+        r = np.where(self.mask, c0 * (self.twtt_s - model), 0.0)
+        jac *= np.where(self.mask, c0, 0.0)[:, None]
+        valid, idx = self.fixed("valid"), self.fixed("slot_index")
+        r_pad = np.where(valid, r[idx], 0.0)
+        j_pad = jac[idx]
+        j_pad *= valid[..., None]
+        rw = np.matmul(self.whiten, r_pad[..., None])[..., 0].reshape(1, -1)
+        jw = np.matmul(self.whiten, j_pad).reshape(1, -1, xs.size)
+        self._cache.update(key=key, rw=rw, jw=jw)
+        return rw, jw
+
+
+def _slots(ping: IntArray, n: int) -> IntArray:
+    """``(n, S)`` table of the replies of each ping (``-1`` padding), ``S`` the most replies of a ping."""
+    order = np.argsort(ping, kind="stable")
+    counts = np.bincount(ping, minlength=n)
+    width = max(int(counts.max()), 1)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rank = np.arange(ping.size) - start[ping[order]]
+    table = np.full((n, width), -1, dtype=np.int64)
+    table[ping[order], rank] = order
+    return table
+
+
+def _whitening(problem: ArrayProblem, x: FloatArray, var_extra: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Inverse Cholesky factors of each ping's reply covariance (see the module docstring) and the
+    marginal GNSS variance of each reply, m^2."""
+    s = problem.survey
+    pos = problem.positions(x)[s.reply_transponder]
+    lever = problem.lever_arm(x)
+    a = s.transmit_enu_m(lever)[s.reply_ping]
+    b = s.receive_enu_m(lever)
+    u_tx = (a - pos) / np.linalg.norm(a - pos, axis=1, keepdims=True)
+    u_rx = (b - pos) / np.linalg.norm(b - pos, axis=1, keepdims=True)
+    c_tx = s.transmit_antenna_cov_m2[s.reply_ping]
+    var_tx = np.einsum("mi,mij,mj->m", u_tx, c_tx, u_tx)
+    var_rx = np.einsum("mi,mij,mj->m", u_rx, s.receive_antenna_cov_m2, u_rx)
+    slots = problem.slots
+    valid = (slots >= 0) & problem.mask[np.where(slots >= 0, slots, 0)]
+    idx = np.where(valid, slots, 0)
+    v = np.where(valid[..., None], u_tx[idx], 0.0)  # (n, S, 3)
+    cov = np.einsum("nsi,nij,ntj->nst", v, s.transmit_antenna_cov_m2, v)
+    diag = np.where(valid, var_rx[idx] + var_extra[idx], 1.0)
+    cov = cov + diag[..., None] * np.eye(slots.shape[1])
+    chol = np.linalg.cholesky(cov)
+    return np.linalg.inv(chol), var_tx + var_rx
+
+
+def _tan_incidence(problem: ArrayProblem, x: FloatArray) -> FloatArray:
+    s = problem.survey
+    pos = problem.positions(x)[s.reply_transponder]
+    a = s.transmit_enu_m(problem.lever_arm(x))[s.reply_ping]
+    return np.hypot(a[:, 0] - pos[:, 0], a[:, 1] - pos[:, 1]) / np.maximum(a[:, 2] - pos[:, 2], 1e-3)
+
+
+def _refresh_bending(problem: ArrayProblem, x: FloatArray, force: bool = False) -> None:
+    """Rebuild a transponder's bending table when its depth moved by more than 0.5 m or its legs left the
+    table's distances or transducer depths, and re-evaluate the frozen bending corrections at ``x``."""
+    ac = problem.acoustics
+    if ac.model != "ray" or ac.profile is None:
+        return
+    s = problem.survey
+    pos = problem.positions(x)
+    lever = problem.lever_arm(x)
+    tx = s.transmit_enu_m(lever)
+    rx = s.receive_enu_m(lever)
+    za_all = ac.surface_m - np.concatenate([tx[:, 2], rx[:, 2]])
+    top = (float(za_all.min()), float(za_all.max()))
+    j_of = s.reply_transponder
+    for j in range(pos.shape[0]):
+        zb = ac.surface_m - pos[j, 2]
+        table = ac.tables[j]
+        sel = j_of == j
+        if not sel.any():
+            continue
+        legs = np.concatenate([tx[s.reply_ping[sel]], rx[sel]])
+        reach = float(np.max(np.hypot(legs[:, 0] - pos[j, 0], legs[:, 1] - pos[j, 1])))
+        stale = table is None or abs(table.bottom_m - zb) > 0.5 or reach > table.horizontal_m[-1]
+        if force or stale or top[0] < table.top_m[0] - 0.01 or top[1] > table.top_m[-1] + 0.01:
+            ac.tables[j] = bending_table(ac.profile, zb, top, 1.2 * reach + 10.0)
+    problem.invalidate()
+    for leg, out in ((tx[s.reply_ping], ac.delta_tx_s), (rx, ac.delta_rx_s)):
+        for j in range(pos.shape[0]):
+            sel = j_of == j
+            table = ac.tables[j]
+            if not sel.any() or table is None:
+                continue
+            horiz = np.hypot(leg[sel, 0] - pos[j, 0], leg[sel, 1] - pos[j, 1])
+            out[sel] = table.correction_s(ac.surface_m - leg[sel, 2], horiz)
+
+
+# --------------------------------------------------------------------------------------------------
+# the solve
+
+
+def localize_gnssa_array(
+    survey: GnssaArraySurvey,
+    options: GnssaArrayOptions | None = None,
+    *,
+    profile: SoundSpeedProfile | None = None,
+    geometry: ArrayGeometry | None = None,
+) -> GnssaArrayResult:
+    """Localize a transponder array from one GNSS-A survey (see the module docstring).
+
+    Parameters
+    ----------
+    survey : GnssaArraySurvey
+    options : GnssaArrayOptions, optional
+        Defaults: oceanloc's (sound speed, gradient, noise estimated, ray tracing with a profile).
+    profile : SoundSpeedProfile, optional
+        The survey's sound-speed profile (needed by the ``harmonic`` and ``ray`` models).
+    geometry : ArrayGeometry, optional
+        The array's geometry from a prior campaign (needed by the ``common_shift`` solution; also the
+        starting positions of ``independent`` when the survey has no approximate positions).
+
+    Returns
+    -------
+    GnssaArrayResult
+
+    Raises
+    ------
+    ConfigError
+        Settings that do not fit the survey (no profile for the ``ray`` model, no geometry for the shift).
+    DataError
+        A survey that cannot be solved reliably (too many gross errors, too few replies).
+    """
+    opts = options or GnssaArrayOptions()
+    setup = _setup(survey, opts, profile, geometry)
+    problem, prior = setup.problem, setup.prior
+    m = survey.n_replies
+    used = setup.candidates.copy()
+    n_candidates = int(used.sum())
+    max_out = int(opts.max_outlier_fraction * n_candidates)
+    sigma_path, beta = opts.sigma_path_m, 0.0
+    x = prior.mean[0].copy()
+    map_opts = MapOptions(delta_min_m=1e-7, max_iterations=100, surface_z_m=None)
+    exclusions: list[ReplyExclusion] = []
+    iterations: list[ArrayIteration] = []
+    result = None
+    resid = np.zeros(m)
+    sigma = np.ones(m)
+    for rnd in range(opts.max_rounds):
+        # three noise re-estimations on the first round, one per round after it
+        for _ in range(3 if opts.estimate_noise and rnd == 0 else 1):
+            x_before = x.copy()
+            _refresh_bending(problem, x, force=rnd == 0 and not iterations)
+            tan_inc = _tan_incidence(problem, x)
+            extra = sigma_path**2 + (beta * tan_inc) ** 2
+            problem.mask = used
+            problem.whiten, gnss_var = _whitening(problem, x, extra)
+            problem.invalidate()
+            result = solve_map(problem, prior, map_opts, initial=x[None, :])
+            x = result.estimate[0]
+            resid = problem.residual_m(x)
+            if opts.estimate_noise:
+                sigma_path, beta = _variance_components(
+                    resid[used], gnss_var[used], tan_inc[used], opts.range_dependent_weights
+                )
+            change = float(np.max(np.abs(problem.positions(x) - problem.positions(x_before))))
+            iterations.append(
+                ArrayIteration(
+                    round=rnd,
+                    replies_used=int(used.sum()),
+                    sigma_path_m=float(sigma_path),
+                    beta_m=float(beta),
+                    cost=float(result.cost[0]),
+                    map_iterations=int(result.iterations[0]),
+                    position_change_m=change,
+                    excluded=0,
+                )
+            )
+        tan_inc = _tan_incidence(problem, x)
+        sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * tan_inc) ** 2)
+        remove = _outliers(opts, resid, sigma, used, max_out - (n_candidates - int(used.sum())))
+        if remove.size == 0:
+            break
+        for o in remove:
+            exclusions.append(_exclusion(survey, int(o), resid, sigma, opts))
+        used = used.copy()
+        used[remove] = False
+        iterations[-1] = dataclasses.replace(iterations[-1], excluded=int(remove.size))
+    assert result is not None
+    # bending corrections at the final estimate, one last solve
+    _refresh_bending(problem, x)
+    problem.whiten, gnss_var = _whitening(
+        problem, x, sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2
+    )
+    problem.invalidate()
+    result = solve_map(problem, prior, map_opts, initial=x[None, :])
+    x = result.estimate[0]
+    resid = problem.residual_m(x)
+    sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2)
+    left = used & (np.abs(resid) > opts.gross_error_m)
+    if left.any() and opts.prescreen:
+        worst = int(np.argmax(np.where(left, np.abs(resid), 0.0)))
+        raise DataError(
+            f"{survey.path or survey.name}: {int(left.sum())} used replies still have |residual| > "
+            f"{opts.gross_error_m:g} m (reply {worst}: {resid[worst]:+.1f} m): the survey cannot be solved "
+            "reliably; check its travel times, turn-around delays and transponder order"
+        )
+    return _result(
+        survey, opts, setup, result, x, used, resid, sigma, sigma_path, beta, exclusions, iterations
+    )
+
+
+def _outliers(
+    opts: GnssaArrayOptions, resid: FloatArray, sigma: FloatArray, used: BoolArray, room: int
+) -> IntArray:
+    """Replies to exclude this round (largest first), at most ``room``."""
+    if room <= 0:
+        return np.zeros(0, dtype=np.int64)
+    if opts.outlier_rule == "residual":
+        score = np.where(used, np.abs(resid), 0.0)
+        bad = np.flatnonzero(score > opts.residual_limit_m)
+        per_round = bad.size
+    else:
+        score = np.where(used, np.abs(resid) / sigma, 0.0)
+        bad = np.flatnonzero(score > opts.outlier_threshold)
+        per_round = 1 + int(used.sum()) // 1000
+    order = bad[np.argsort(-score[bad], kind="stable")]
+    return order[: min(per_round, room)]
+
+
+def _exclusion(
+    survey: GnssaArraySurvey, o: int, resid: FloatArray, sigma: FloatArray, opts: GnssaArrayOptions
+) -> ReplyExclusion:
+    r = float(resid[o])
+    if opts.outlier_rule == "residual":
+        reason = f"outlier: |residual| {abs(r):.3f} m > limit {opts.residual_limit_m:g} m"
+    else:
+        kind = "gross error" if abs(r) > opts.gross_error_m else "outlier"
+        reason = (
+            f"{kind}: |residual| {abs(r):.3f} m = {abs(r) / sigma[o]:.1f} sigma"
+            f" > {opts.outlier_threshold:g} sigma"
+        )
+    ping = int(survey.reply_ping[o])
+    return ReplyExclusion(
+        reply=o,
+        ping=ping,
+        transponder=survey.transponder_ids[int(survey.reply_transponder[o])],
+        line=int(survey.line[o]),  # type: ignore[index]
+        time_s=float(survey.t_transmit_s[ping]),
+        reason=reason,
+        residual_m=r,
+    )
+
+
+@dataclass(slots=True)
+class _Setup:
+    problem: ArrayProblem
+    prior: GaussianPrior
+    candidates: BoolArray
+    knots_s: FloatArray
+    exclusions: list[ReplyExclusion]
+    lever_in_state: bool
+
+
+def _setup(
+    survey: GnssaArraySurvey,
+    opts: GnssaArrayOptions,
+    profile: SoundSpeedProfile | None,
+    geometry: ArrayGeometry | None,
+) -> _Setup:
+    s = survey
+    n_t = s.n_transponders
+    model = opts.acoustic_model
+    if model == "auto":
+        model = "ray" if profile is not None else "straight"
+    if model in ("ray",) and profile is None:
+        raise ConfigError("the ray acoustic model needs a sound-speed profile")
+    if model == "harmonic" and profile is None and opts.transponder_speeds_mps is None:
+        raise ConfigError("the harmonic acoustic model needs a sound-speed profile or transponder_speeds_mps")
+    if opts.solution == "common_shift" and geometry is None:
+        raise ConfigError("the common_shift solution needs the array geometry of a prior campaign")
+    if geometry is not None and geometry.positions_enu_m.shape != (n_t, 3):
+        raise ConfigError(f"the array geometry must give ({n_t}, 3) positions")
+    if opts.transponder_speeds_mps is not None and len(opts.transponder_speeds_mps) != n_t:
+        raise ConfigError(
+            f"transponder_speeds_mps needs {n_t} values, got {len(opts.transponder_speeds_mps)}"
+        )
+    twtt = s.twtt_s - s.turnaround_s[s.reply_transponder]
+    if np.any(twtt <= 0.0):
+        i = int(np.argmax(twtt <= 0.0))
+        raise DataError(f"{s.path or s.name}: reply {i}: the turn-around delay exceeds the travel time")
+    tx = s.transmit_enu_m()
+    rx = s.receive_enu_m()
+    surface = float(np.mean(tx[:, 2])) if opts.surface_height_m is None else float(opts.surface_height_m)
+    counts = s.replies_per_transponder
+    if np.any(counts == 0):
+        missing = ", ".join(s.transponder_ids[j] for j in np.flatnonzero(counts == 0))
+        raise DataError(f"{s.path or s.name}: no reply from transponder(s) {missing}")
+    # first speed guess, robust first fit per transponder
+    c_guess = opts.sound_speed_mps or (
+        float(profile.harmonic_mean_mps(0.0, float(np.median(0.5 * 1500.0 * twtt))))
+        if profile is not None
+        else 1500.0
+    )
+    gross = np.zeros(s.n_replies, dtype=bool)
+    fits = np.zeros((n_t, 3))
+    exclusions: list[ReplyExclusion] = []
+    for j in range(n_t):
+        sel = np.flatnonzero(s.reply_transponder == j)
+        a, b, t = tx[s.reply_ping[sel]], rx[sel], twtt[sel]
+        if sel.size >= 8:
+            # the robust fit on at most _ROBUST_FIT_REPLIES replies spread over the survey; residuals of all
+            sub = np.arange(0, sel.size, max(1, sel.size // _ROBUST_FIT_REPLIES))
+            fit = robust_first_fit(a[sub], b[sub], t[sub], c_guess, surface)
+            fits[j] = fit.position_enu_m
+            if opts.prescreen:
+                p_fit = fit.position_enu_m
+                resid_all = (
+                    c_guess * t - np.linalg.norm(a - p_fit, axis=1) - np.linalg.norm(b - p_fit, axis=1)
+                )
+                r = resid_all - np.median(fit.residual_m)
+                thr = max(opts.prescreen_sigmas * fit.sigma_m, opts.gross_error_m)
+                bad = np.abs(r) > thr
+                if bad.sum() > opts.max_gross_fraction * sel.size:
+                    raise DataError(
+                        f"{s.path or s.name}: {int(bad.sum())} of {sel.size} replies of transponder "
+                        f"{s.transponder_ids[j]} have travel times no single position explains "
+                        f"(|residual| > {thr:.2f} m at a robust first fit), more than the "
+                        f"{100.0 * opts.max_gross_fraction:.0f} % allowed: check the travel times, their "
+                        "units, the turn-around delays and the transponder order"
+                    )
+                gross[sel[bad]] = True
+                for k in np.flatnonzero(bad):
+                    o = int(sel[k])
+                    exclusions.append(
+                        ReplyExclusion(
+                            reply=o,
+                            ping=int(s.reply_ping[o]),
+                            transponder=s.transponder_ids[j],
+                            line=int(s.line[o]),  # type: ignore[index]
+                            time_s=float(s.t_transmit_s[s.reply_ping[o]]),
+                            reason=f"gross error (pre-screen): |residual| {abs(r[k]):.1f} m at the robust "
+                            f"first fit > {thr:.2f} m",
+                            residual_m=float(r[k]),
+                        )
+                    )
+        else:
+            i = int(np.argmin(t))
+            fits[j] = a[i] - np.array([0.0, 0.0, 0.5 * c_guess * t[i]])
+    if s.approx_positions_enu_m is not None:
+        start = s.approx_positions_enu_m.copy()
+    elif geometry is not None and opts.solution == "independent":
+        start = geometry.positions_enu_m.copy()
+    else:
+        start = fits
+    # reference speed and fixed per-transponder slowness
+    depths = surface - start[:, 2]
+    if opts.sound_speed_mps is not None:
+        c_ref = float(opts.sound_speed_mps)
+    elif profile is not None:
+        c_ref = float(profile.harmonic_mean_mps(0.0, float(np.mean(depths))))
+    else:
+        c_ref = 1500.0
+    fixed = None
+    if model == "harmonic":
+        if opts.transponder_speeds_mps is not None:
+            fixed = 1.0 / np.asarray(opts.transponder_speeds_mps, dtype=float)
+        else:
+            assert profile is not None
+            fixed = profile.harmonic_slowness_spm(np.zeros(n_t), depths)
+    acoustics = _Acoustics(
+        model=model,
+        c_ref=c_ref,
+        surface_m=surface,
+        profile=profile,
+        fixed_slowness=fixed,
+        delta_tx_s=np.zeros(s.n_replies),
+        delta_rx_s=np.zeros(s.n_replies),
+        tables=[None] * n_t,
+    )
+    # knots on the replies' mid-times
+    t_mid = 0.5 * (s.t_transmit_s[s.reply_ping] + s.t_receive_s)
+    knots = _knots(t_mid, opts, s.n_pings)
+    basis = hat_basis(t_mid, knots)
+    lever_in_state = opts.estimate_lever_arm or bool(np.any(s.lever_arm_cov_m2 != 0.0))
+    shift = opts.solution == "common_shift"
+    n_pos = 3 if shift else 3 * n_t
+    problem = ArrayProblem(
+        survey=s,
+        twtt_s=twtt,
+        basis=basis,
+        geometry=geometry.positions_enu_m if shift and geometry is not None else None,
+        acoustics=acoustics,
+        n_pos=n_pos,
+        gradient=opts.estimate_gradient,
+        lever=lever_in_state,
+        mask=~gross,
+        slots=_slots(s.reply_ping, s.n_pings),
+        whiten=np.zeros(0),
+    )
+    k0 = problem.first_knot
+    dim = k0 + knots.size
+    mean = np.zeros(dim)
+    var = np.zeros(dim)
+    if shift:
+        assert geometry is not None
+        mean[:3] = np.median(fits - geometry.positions_enu_m, axis=0)
+    else:
+        mean[:n_pos] = start.reshape(-1)
+    var[:n_pos] = opts.sigma_position_prior_m**2
+    cov = np.zeros((dim, dim))
+    if opts.estimate_gradient:
+        var[problem.col_gradient : problem.col_gradient + 2] = opts.sigma_gradient_per_km**2
+    cov[np.diag_indices(k0)] = var[:k0]
+    if lever_in_state:
+        cl = problem.col_lever
+        mean[cl : cl + 3] = s.lever_arm_body_m
+        lever_cov = s.lever_arm_cov_m2
+        if opts.estimate_lever_arm and not np.any(lever_cov != 0.0):
+            lever_cov = opts.sigma_lever_arm_m**2 * np.eye(3)
+        cov[cl : cl + 3, cl : cl + 3] = lever_cov
+    if knots.size:
+        mean[k0:] = c_ref
+        lag = np.abs(knots[:, None] - knots[None, :])
+        cov[k0:, k0:] = opts.sigma_sound_speed_mps**2 * np.exp(-lag / opts.sound_speed_correlation_s)
+    return _Setup(
+        problem=problem,
+        prior=GaussianPrior(mean=mean[None, :], cov=cov),
+        candidates=~gross,
+        knots_s=knots,
+        exclusions=exclusions,
+        lever_in_state=lever_in_state,
+    )
+
+
+def _knots(t_s: FloatArray, opts: GnssaArrayOptions, n_pings: int) -> FloatArray:
+    """Sound-speed knot times: at most ``knot_spacing_s`` apart, at least ``min_pings_per_knot`` pings
+    per segment on average."""
+    if not opts.estimate_sound_speed:
+        return np.zeros(0)
+    t0, t1 = float(t_s.min()), float(t_s.max())
+    if opts.knot_spacing_s is None or t1 <= t0:
+        return np.array([t0])
+    spacing = max(opts.knot_spacing_s, (t1 - t0) * opts.min_pings_per_knot / max(n_pings, 1))
+    n_seg = max(1, round((t1 - t0) / spacing))
+    return np.linspace(t0, t1, n_seg + 1)
+
+
+def _linearized_jackknife(
+    problem: ArrayProblem, prior: GaussianPrior, x: FloatArray, blocks: int, cols: slice
+) -> FloatArray | None:
+    """Delete-one-block jackknife of the state columns ``cols`` over contiguous time blocks of pings,
+    each block's estimate one Gauss-Newton step from the solution (normal-matrix downdate)."""
+    s = problem.survey
+    used_pings = np.unique(s.reply_ping[problem.mask])
+    if blocks < 2 or used_pings.size < 4 * blocks:
+        return None
+    rw, jw = problem.evaluate(x[None, :], np.zeros(1, dtype=np.int64))
+    rw, jw = rw[0].reshape(s.n_pings, -1), jw[0].reshape(s.n_pings, problem.slots.shape[1], -1)
+    order = used_pings[np.argsort(s.t_transmit_s[used_pings], kind="stable")]
+    block_of = np.full(s.n_pings, -1)
+    block_of[order] = np.arange(order.size) * blocks // order.size
+    info = np.linalg.inv(prior.cov)
+    flat = jw.reshape(-1, x.size)
+    a_full = flat.T @ flat + info
+    reps = []
+    for g in range(blocks):
+        sel = block_of == g
+        jg, rg = jw[sel].reshape(-1, x.size), rw[sel].reshape(-1)
+        reps.append(np.linalg.solve(a_full - jg.T @ jg, -(jg.T @ rg)))
+    dev = np.array(reps)[:, cols]
+    dev = dev - dev.mean(axis=0)
+    return (blocks - 1) / blocks * dev.T @ dev
+
+
+def _result(
+    survey: GnssaArraySurvey,
+    opts: GnssaArrayOptions,
+    setup: _Setup,
+    result: object,
+    x: FloatArray,
+    used: BoolArray,
+    resid: FloatArray,
+    sigma: FloatArray,
+    sigma_path: float,
+    beta: float,
+    exclusions: list[ReplyExclusion],
+    iterations: list[ArrayIteration],
+) -> GnssaArrayResult:
+    problem = setup.problem
+    n_t = survey.n_transponders
+    cov_state = result.covariance[0]  # type: ignore[attr-defined]
+    npos = problem.n_pos
+    formal_pos = cov_state[:npos, :npos]
+    jk = _linearized_jackknife(problem, setup.prior, x, opts.jackknife_blocks, slice(0, npos))
+    cov_pos = formal_pos if jk is None else formal_pos + _positive_part(jk - formal_pos)
+    # survey-wide GNSS error: the mean antenna covariance of the used pings, common to every transponder
+    ping_used = np.unique(survey.reply_ping[used])
+    c_gnss = 0.5 * (
+        np.mean(survey.transmit_antenna_cov_m2[ping_used], axis=0)
+        + np.mean(survey.receive_antenna_cov_m2[used], axis=0)
+    )
+    if not opts.gnss_common_mode:
+        c_gnss = np.zeros((3, 3))
+    if problem.geometry is not None:
+        shift_cov = cov_pos + c_gnss
+        stack = np.tile(np.eye(3), (n_t, 1))  # (3J, 3)
+        cov = stack @ shift_cov @ stack.T
+        formal = stack @ formal_pos @ stack.T
+        jk_full = None if jk is None else stack @ jk @ stack.T
+        gnss_full = stack @ c_gnss @ stack.T
+        shift = x[:3].copy()
+    else:
+        gnss_full = np.tile(c_gnss, (n_t, n_t))
+        cov = cov_pos + gnss_full
+        formal = formal_pos
+        jk_full = jk
+        shift = None
+        shift_cov = None
+    positions = problem.positions(x)
+    avg = np.tile(np.eye(3), (1, n_t)) / n_t  # (3, 3J)
+    centre = ArrayCentre(position_enu_m=positions.mean(axis=0), covariance_m2=avg @ cov @ avg.T, epoch_s=0.0)
+    epoch = float(np.mean(survey.t_transmit_s[np.unique(survey.reply_ping[used])]))
+    centre = dataclasses.replace(centre, epoch_s=epoch)
+    k0 = problem.first_knot
+    knots = x[k0:].copy()
+    knot_sig = np.sqrt(np.diag(cov_state)[k0:])
+    speed = problem.speed(x)
+    c_ref = problem.acoustics.c_ref
+    grad = x[problem.col_gradient : problem.col_gradient + 2].copy() if problem.gradient else np.zeros(2)
+    grad_sig = (
+        np.sqrt(np.diag(cov_state)[problem.col_gradient : problem.col_gradient + 2])
+        if problem.gradient
+        else np.zeros(2)
+    )
+    if problem.lever:
+        cl = problem.col_lever
+        lever = x[cl : cl + 3].copy()
+        lever_cov = cov_state[cl : cl + 3, cl : cl + 3].copy()
+        lever_prior = np.sqrt(np.diag(setup.prior.cov[cl : cl + 3, cl : cl + 3]))
+    else:
+        lever, lever_cov = survey.lever_arm_body_m.copy(), survey.lever_arm_cov_m2.copy()
+        lever_prior = np.sqrt(np.diag(lever_cov))
+    geodetic = None if survey.origin is None else enu_to_geodetic(positions, survey.origin)
+    all_exclusions = tuple(setup.exclusions) + tuple(exclusions)
+    mean_speed = float(np.mean(speed[used]))
+    return GnssaArrayResult(
+        name=survey.name,
+        solution=opts.solution,
+        acoustic_model=problem.acoustics.model,
+        transponder_ids=survey.transponder_ids,
+        positions_enu_m=positions,
+        covariance_m2=cov,
+        covariance_formal_m2=formal,
+        covariance_jackknife_m2=jk_full,
+        covariance_gnss_m2=gnss_full,
+        positions_geodetic=geodetic,
+        shift_enu_m=shift,
+        shift_covariance_m2=shift_cov,
+        centre=centre,
+        epoch_s=epoch,
+        reference_speed_mps=c_ref,
+        knot_times_s=setup.knots_s,
+        sound_speed_knots_mps=knots,
+        sound_speed_knot_sigma_mps=knot_sig,
+        sound_speed_mps=mean_speed,
+        speed_correction_ppm=1e6 * (mean_speed / c_ref - 1.0),
+        gradient_per_km=grad,
+        gradient_sigma_per_km=grad_sig,
+        lever_arm_body_m=lever,
+        lever_arm_covariance_m2=lever_cov,
+        lever_arm_estimated=bool(opts.estimate_lever_arm),
+        lever_arm_prior_sigma_m=lever_prior,
+        reply_ping=survey.reply_ping,
+        reply_transponder=survey.reply_transponder,
+        residual_m=resid,
+        residual_s=resid / c_ref,
+        sigma_m=sigma,
+        used=used,
+        exclusions=all_exclusions,
+        iterations=tuple(iterations),
+        sigma_path_m=float(sigma_path),
+        beta_m=float(beta),
+        residual_rms_m=float(np.sqrt(np.mean(resid[used] ** 2))),
+        converged=bool(result.converged[0]),  # type: ignore[attr-defined]
+        time_origin_unix_s=float(survey.time_origin_unix_s),
+        status="ok" if bool(result.converged[0]) else str(result.message[0]),  # type: ignore[attr-defined]
+    )

@@ -1,0 +1,55 @@
+"""GNATSS-format surveys through the field layer: the antenna + attitude + lever-arm path reproduces the
+transducer positions GNATSS's files carry, and both methods recover the truth of the packaged example."""
+
+import json
+
+import numpy as np
+import pytest
+
+from oceanloc.errors import ConfigError
+from oceanloc.field.gnatss_input import gnatss_example_config, load_gnatss_input, localize_gnatss_input
+
+
+@pytest.fixture(scope="module")
+def example():
+    folder = gnatss_example_config().parent
+    truth = json.loads((folder / "truth.json").read_text())
+    return folder, np.array(truth["transponders_enu_m"])
+
+
+def test_antenna_attitude_lever_arm_give_the_transducer_positions(example):
+    folder, _ = example
+    cfg = folder / "config.yaml"
+    via_antenna = load_gnatss_input(
+        cfg, pxp_tt=folder / "pxp_tt", antenna=folder / "GPS_POS_FREED", attitude=folder / "RPH"
+    ).pings
+    via_positions = load_gnatss_input(
+        cfg, pxp_tt=folder / "pxp_tt", positions=folder / "POS_FREED_TRANS_TWTT"
+    ).pings
+    assert via_antenna.n_replies == via_positions.n_replies == 600
+    # the lever arm (0.30, -0.10, 1.20) m rotated by roll, pitch and heading; files carry 0.1 mm
+    assert np.max(np.abs(via_antenna.transmit_xyz_m - via_positions.transmit_xyz_m)) < 2e-4
+    assert np.max(np.abs(via_antenna.receive_xyz_m - via_positions.receive_xyz_m)) < 2e-4
+    # GPS_POS_FREED carries sigmas only: the diagonal of the transducer covariance is kept
+    d_a = np.diagonal(via_antenna.transmit_cov_m2, axis1=1, axis2=2)
+    d_p = np.diagonal(via_positions.transmit_cov_m2, axis1=1, axis2=2)
+    assert np.allclose(d_a, d_p, rtol=5e-3)  # sigmas written to 0.1 mm
+
+
+def test_both_methods_recover_the_example(example):
+    folder, truth = example
+    data = load_gnatss_input(folder / "config.yaml")
+    gn = localize_gnatss_input(data, method="gnatss")
+    assert np.max(np.abs(gn.positions_enu_m - truth)) < 0.01  # GNATSS's method: 2 mm sigmas
+    oc = localize_gnatss_input(data, method="oceanloc", solution="common_shift")
+    assert np.all(np.abs(oc.positions_enu_m - truth) < 3.0 * oc.sigma_enu_m)
+    rec = oc.to_record()
+    assert rec["pings"]["reason"].count("") == 600 - rec["replies_excluded"]
+
+
+def test_input_combinations_are_checked(example):
+    folder, _ = example
+    with pytest.raises(ConfigError, match="--antenna and --attitude go together"):
+        load_gnatss_input(folder / "config.yaml", pxp_tt=folder / "pxp_tt", antenna=folder / "GPS_POS_FREED")
+    with pytest.raises(ConfigError, match="--antenna and --attitude need --pxp-tt"):
+        load_gnatss_input(folder / "config.yaml", antenna=folder / "GPS_POS_FREED", attitude=folder / "RPH")
