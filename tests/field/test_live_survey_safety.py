@@ -1,13 +1,16 @@
 """The live survey's safety end to end on loopback (boat simulator, real gpsd, SeaTrac beacon simulator,
 ``oceanloc survey run`` as a subprocess): cutting the MAVLink link or the ranges puts the boat in HOLD
-within the timeout; SIGTERM holds it and exits 0; a dry run plans and commands nothing."""
+within the timeout; SIGTERM holds it and exits 0; a dry run plans and commands nothing, and serves the
+live page meanwhile."""
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import subprocess
 import time
+import urllib.request
 from pathlib import Path
 
 from oceanloc.sim.boat import MODE_GUIDED, MODE_HOLD
@@ -60,16 +63,37 @@ def test_cutting_the_vehicle_link_or_the_ranges_holds_the_boat(tmp_path: Path):
 
 
 @NEEDS_GPSD
-def test_a_dry_run_plans_and_commands_nothing(tmp_path: Path):
+def test_a_dry_run_plans_and_commands_nothing_and_serves_the_live_page(tmp_path: Path):
     journal = tmp_path / "survey.db"
     with live_rig(TRANSPONDERS) as rig:
         start_survey(journal, DROPS)
-        cmd = run_command(rig, journal, "--dry-run", "--max-time", "4", "--ping-interval", "0.1")
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        cmd = run_command(
+            rig, journal, "--dry-run", "--max-time", "6", "--ping-interval", "0.1", "--serve", "0"
+        )
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            first = proc.stderr.readline()  # "live page of JOURNAL: http://127.0.0.1:PORT/"
+            url = first.rsplit(" ", 1)[-1].strip()
+            assert url.startswith("http://127.0.0.1:"), first
+            _wait_for(lambda: len(_events(journal, "plan")) >= 3, 30.0, "three plans")
+            with urllib.request.urlopen(url, timeout=10) as page:
+                assert page.status == 200 and b"<html" in page.read(2000).lower()
+
+            def data() -> dict:
+                with urllib.request.urlopen(url.rstrip("/") + "/data", timeout=10) as answer:
+                    return json.loads(answer.read())
+
+            # the page's server reads the journal twice a second: the track is there within a few reads
+            _wait_for(lambda: len(data()["fix"]["e"]) > 0, 5.0, "the track on the live page")
+            assert "fixes" in data()["status"]["records"]
+            out, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
         assert rig.boat.mode == MODE_HOLD
         assert not rig.boat.received.get("SET_POSITION_TARGET_GLOBAL_INT")
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "dry run" in proc.stdout and " next " in proc.stdout
+    assert proc.returncode == 0, err[-2000:]
+    assert "dry run" in out and " next " in out
     plans = _events(journal, "plan")
     assert plans and all(math.isfinite(p["next"]["lat_deg"]) for p in plans)
     assert {c["status"] for c in _events(journal, "command")} == {None}

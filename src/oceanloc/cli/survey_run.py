@@ -17,7 +17,7 @@ from typing import IO, Annotated
 
 import typer
 
-from oceanloc.cli._common import console, err_console
+from oceanloc.cli._common import console, err_console, escape
 from oceanloc.cli._options import parse_floats, parse_origin
 from oceanloc.cli.survey_journal import JournalArg, app
 from oceanloc.config.survey_journal import JournalSettings
@@ -28,6 +28,7 @@ from oceanloc.field.live_survey import Epoch, LiveOptions, Notice, StopRule, run
 from oceanloc.io.journal import Journal
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
 from oceanloc.io.records import to_jsonable
+from oceanloc.report.html.live import serve_journal
 from oceanloc.report.tables import live as live_tables
 
 
@@ -82,6 +83,10 @@ def run(
     json_lines: Annotated[
         Path | None, typer.Option("--json-lines", help="Append one JSON object per epoch and notice here.")
     ] = None,
+    serve: Annotated[
+        int | None,
+        typer.Option(help="Serve the live page (read-only) on http://127.0.0.1:PORT while the survey runs."),
+    ] = None,
     gcs_heartbeat: Annotated[
         float, typer.Option(help="Our ground-station heartbeat rate, Hz (raise it for a sped-up simulator).")
     ] = 1.0,
@@ -108,7 +113,15 @@ def run(
     stop = threading.Event()
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stop.set())
-    link = _connect(vehicle, gcs_heartbeat) if vehicle is not None and not dry_run else None
+    page = None if serve is None else serve_journal(journal, serve)
+    if page is not None:
+        err_console.print(f"live page of {escape(str(journal))}: {page.url}", highlight=False)
+    try:
+        link = _connect(vehicle, gcs_heartbeat) if vehicle is not None and not dry_run else None
+    except BaseException:
+        if page is not None:
+            page.stop()
+        raise
     try:
         result = run_live_survey(
             journal,
@@ -122,6 +135,8 @@ def run(
             command_line=shlex.join(["oceanloc", *sys.argv[1:]]),
         )
     finally:
+        if page is not None:
+            page.stop()
         if link is not None:
             link.close()
         if out is not None:
