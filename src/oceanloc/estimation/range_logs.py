@@ -232,14 +232,16 @@ class CorrelatedRangeProblem:
 MIN_BEACON_RANGES = 4
 """Ranges a beacon needs to be localized (three position coordinates, one redundancy)."""
 
-REBASE_STEP_M = 0.5
+REBASE_STEP_M = 0.1
 """:func:`robust_white_fit`: the linearization point is moved (an O(n) pass) once the estimate has moved
-this far from it, metres. The linearized estimate is then within about ``step^2 / (2 range)`` of the
-exact one (a few centimetres at 5 m ranges), well inside :data:`EXACT_MARGIN`."""
+this far from it, metres. The linearized estimate is then within about ``10 step^2 / (2 range)`` of the
+exact one (a few millimetres at 5 m ranges; the factor 10 is the weak vertical geometry), inside
+:data:`EXACT_MARGIN`."""
 
-EXACT_MARGIN = 0.05
-""":func:`robust_white_fit`: a removal decision within this relative margin of the threshold (5 %: 15 cm
-of residual at a 1 m scale) is made on the fully re-solved estimate, as the original rule makes it."""
+EXACT_MARGIN = 5e-3
+""":func:`robust_white_fit`: a removal decision within this relative margin of the threshold (15 mm of
+residual at a 1 m scale) is made on the converged estimate of the current mask, and the decision to stop
+on a full :func:`solve_map` re-solve, as the original rule makes them."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -338,8 +340,15 @@ def robust_white_fit(
     inv_s2 = 1.0 / sigma_m**2
     res = _solve(sensors, z, sigma_m, used, prior, options, initial_m)
     x = res.estimate[0].copy()
-    exact = True  # x is the full solve of the current mask
+    solved = True  # res is the full solve of the current mask and x its estimate
+    refined = True  # x is the converged (Gauss-Newton) estimate of the current mask
     removals = 0
+
+    def gn_step(sums: tuple[float, FloatArray, FloatArray], at: FloatArray) -> FloatArray:
+        """The minimizer of the problem linearized at the reference, minus the reference."""
+        _, s_rg, s_gg = sums
+        return np.linalg.solve(s_gg * inv_s2 + prior_info, -s_rg * inv_s2 - prior_info @ (at - mean))
+
     while True:
         # Reference pass at x: residuals, their gradients d r / d x, the normal-equation sums.
         x_ref = x.copy()
@@ -350,26 +359,26 @@ def robust_white_fit(
         wr = np.where(used, r0, 0.0)
         sum_rr, sum_rg, sum_gg = float(wr @ r0), wr @ g, (g * used[:, None]).T @ g
         n_used = int(used.sum())
-        if not exact:  # one Gauss-Newton step at the new reference; a full solve if it is long
-            x = x_ref + np.linalg.solve(
-                sum_gg * inv_s2 + prior_info, -sum_rg * inv_s2 - prior_info @ (x_ref - mean)
-            )
-            if np.linalg.norm(x - x_ref) > 0.5 * REBASE_STEP_M:
+        if not refined:  # a Gauss-Newton step at the new reference (converged once it is tiny)
+            step = gn_step((sum_rr, sum_rg, sum_gg), x_ref)
+            if np.linalg.norm(step) > 0.5 * REBASE_STEP_M:  # far: a full solve
                 res = _solve(sensors, z, sigma_m, used, prior, options, x)
-                x, exact = res.estimate[0].copy(), True
+                x, solved, refined = res.estimate[0].copy(), True, True
                 continue
+            x = x_ref + step
+            refined = bool(np.linalg.norm(step) <= options.delta_min_m)
+            if refined:
+                x = x_ref  # converged: the reference itself, where the sums are exact
         # Candidates: a range below this can not reach the threshold before the next reference pass.
         low = outlier_threshold * sigma_m - 2.0 * REBASE_STEP_M
         cand = np.flatnonzero(used & (np.abs(r0) >= low))
         cand = cand[np.argsort(-np.abs(r0[cand]), kind="stable")]
         alive = np.ones(cand.size, dtype=bool)
         head = 0
-        rebase = False
         while True:
             d = x - x_ref
             bound = float(np.linalg.norm(d))
             if bound > REBASE_STEP_M:
-                rebase = True
                 break
             while head < cand.size and not alive[head]:
                 head += 1
@@ -389,7 +398,7 @@ def robust_white_fit(
                     alive[pos[order]] = False
                     removals += order.size
                     n_used -= order.size
-                    exact = False
+                    solved = refined = False
                     continue
             if head == cand.size:
                 worst, best = -1, 0.0
@@ -410,16 +419,17 @@ def robust_white_fit(
             s = sum_rr + 2.0 * float(sum_rg @ d) + float(d @ sum_gg @ d)
             scale = max(np.sqrt(max(s, 0.0) / max(n_used, 1)), sigma_m)
             ratio = best / scale
-            if ratio <= outlier_threshold * (1.0 + EXACT_MARGIN) and not exact:
-                res = _solve(sensors, z, sigma_m, used, prior, options, x)
-                x, exact = res.estimate[0].copy(), True
-                rebase = True
-                break
+            if ratio <= outlier_threshold * (1.0 + EXACT_MARGIN) and not refined:
+                break  # decide on the converged estimate: reference passes until it is
             if ratio <= outlier_threshold:
-                return WhiteFit(used=used, result=res, removals=removals)
+                if solved:
+                    return WhiteFit(used=used, result=res, removals=removals)
+                res = _solve(sensors, z, sigma_m, used, prior, options, x)  # the original stops on one
+                x, solved, refined = res.estimate[0].copy(), True, True
+                break
             j = int(cand[worst])
             if removals + 1 >= cap:  # the original's last pass: removes without re-solving
-                if not exact:
+                if not solved:
                     res = _solve(sensors, z, sigma_m, used, prior, options, x)
                 used[j] = False
                 return WhiteFit(used=used, result=res, removals=removals + 1)
@@ -430,13 +440,8 @@ def robust_white_fit(
             sum_rr -= r0[j] ** 2
             sum_rg = sum_rg - r0[j] * g[j]
             sum_gg = sum_gg - np.outer(g[j], g[j])
-            x = x_ref + np.linalg.solve(
-                sum_gg * inv_s2 + prior_info, -sum_rg * inv_s2 - prior_info @ (x_ref - mean)
-            )
-            exact = False
-        if not rebase:
-            break
-    return WhiteFit(used=used, result=res, removals=removals)  # pragma: no cover
+            x = x_ref + gn_step((sum_rr, sum_rg, sum_gg), x_ref)
+            solved = refined = False
 
 
 _WINDOW = 64
