@@ -41,7 +41,6 @@ from oceanloc.estimation.map_gauss_newton import (
     GaussianPrior,
     MapOptions,
     MapResult,
-    RangeProblem,
     solve_map,
 )
 from oceanloc.io.usbl import AlignedRanges
@@ -133,7 +132,10 @@ class CorrelatedRangeProblem:
         var = np.square(np.asarray(sigma_gps_enu_m, dtype=float))
         axes = np.flatnonzero(var > 0.0)
         k = axes.size
-        epochs, state = np.unique(t, return_inverse=True)
+        if t.size and np.all(np.diff(t) > 0.0):  # time order, distinct (a journal beacon's ranges)
+            epochs, state = t, np.arange(t.size)
+        else:
+            epochs, state = np.unique(t, return_inverse=True)
         p = epochs.size
         s2 = float(sigma_white_m) ** 2
         band = np.zeros((k + 1, k * p))
@@ -206,11 +208,19 @@ class CorrelatedRangeProblem:
                 w = back[:, 0].reshape(p, k)[self.state]
                 y = y - np.einsum("ik,ik->i", los, w) / s2**2
         gram = 0.5 * (gram + gram.T)
+        self._cache["gauss-newton", x.tobytes()] = gram[:3, :3].copy()
         if newton:
             c = y / np.where(rho > 0.0, rho, np.inf)
             curv = np.eye(3) * c.sum() - (jac * c[:, None]).T @ jac
             gram[:3, :3] -= curv
         return gram
+
+    def gauss_newton_information(self, x: FloatArray) -> FloatArray:
+        """``J^T Sigma^-1 J`` at ``x (3,)`` (no prior), ``(3, 3)``: kept from the last :meth:`gram`
+        there, else computed."""
+        x = np.asarray(x, dtype=float).reshape(3)
+        hit = self._cache.get(("gauss-newton", x.tobytes()))
+        return hit if hit is not None else self.gram(x)[:3, :3]
 
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
         """Four rows ``A`` with ``A^T A`` the Newton form of :meth:`gram` (quadratic convergence of
@@ -219,12 +229,14 @@ class CorrelatedRangeProblem:
         key = np.asarray(x, dtype=float).tobytes()
         if (hit := self._cache.get(key)) is not None:  # solve_map evaluates an accepted trial twice
             return hit
-        w, vec = np.linalg.eigh(self.gram(x[0], newton=True))
+        self._cache.clear()
+        gram = self.gram(x[0], newton=True)
+        w, vec = np.linalg.eigh(gram)
         if w[0] < -1e-10 * abs(w[-1]):
-            w, vec = np.linalg.eigh(self.gram(x[0]))
+            gram[:3, :3] = self.gauss_newton_information(x[0])
+            w, vec = np.linalg.eigh(gram)
         rows4 = np.sqrt(np.maximum(w, 0.0))[:, None] * vec.T  # rows4^T rows4 = gram
         out = rows4[None, :, 3], rows4[None, :, :3]
-        self._cache.clear()
         self._cache[key] = out
         return out
 
@@ -268,6 +280,47 @@ class WhiteFit:
         return self.result.estimate[0]
 
 
+@dataclass(frozen=True, slots=True)
+class NewtonRangeProblem:
+    """The white-noise range problem of one beacon in the four-row form of
+    :class:`CorrelatedRangeProblem` (``A^T A = [J r]^T [J r] / sigma^2``, the upper-left block the full
+    Hessian ``J^T J / sigma^2 - sum_i r_i (I - h_i h_i^T) / (rho_i sigma^2)`` where that is positive
+    definite), so :func:`solve_map` converges quadratically to the same minimum as with
+    :class:`~oceanloc.estimation.map_gauss_newton.RangeProblem`.
+
+    Attributes
+    ----------
+    sensor_m : (m, 3) float
+        Sensor positions of the used ranges, metres.
+    ranges_m : (m,) float
+    sigma_m : float
+    """
+
+    sensor_m: FloatArray
+    ranges_m: FloatArray
+    sigma_m: float
+
+    @property
+    def batch_size(self) -> int:
+        return 1
+
+    def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
+        diff = x[0] - self.sensor_m
+        rho = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        inv_rho = 1.0 / np.where(rho > 0.0, rho, np.inf)
+        jac = diff * inv_rho[:, None]
+        v = np.column_stack([jac, self.ranges_m - rho])
+        gram = v.T @ v / self.sigma_m**2
+        c = v[:, 3] * inv_rho / self.sigma_m**2
+        newton = gram.copy()
+        newton[:3, :3] -= np.eye(3) * c.sum() - (jac * c[:, None]).T @ jac
+        w, vec = np.linalg.eigh(newton)
+        if w[0] < -1e-10 * abs(w[-1]):
+            w, vec = np.linalg.eigh(gram)
+        rows4 = np.sqrt(np.maximum(w, 0.0))[:, None] * vec.T
+        return rows4[None, :, 3], rows4[None, :, :3]
+
+
 def _solve(
     sensors: FloatArray,
     z: FloatArray,
@@ -277,8 +330,14 @@ def _solve(
     opts: MapOptions,
     x: FloatArray,
 ) -> MapResult:
-    problem = RangeProblem.build(sensors[None], z[None], sigma, used[None])
-    return solve_map(problem, prior, opts, initial=np.asarray(x, dtype=float).reshape(1, 3))
+    """Full MAP solve of the white problem on the used ranges (Newton form; covariance Gauss-Newton's)."""
+    problem = NewtonRangeProblem(sensors[used], z[used], sigma)
+    res = solve_map(problem, prior, opts, initial=np.asarray(x, dtype=float).reshape(1, 3))
+    # The covariance is Gauss-Newton's (J^T J / sigma^2 + P0^-1)^-1 at the estimate, eq. (22).
+    jac = range_jacobian(res.estimate[0], sensors[used]) / sigma
+    info = jac.T @ jac + np.linalg.inv(np.asarray(prior.cov, dtype=float).reshape(3, 3))
+    cov = np.linalg.inv(info)
+    return dataclasses.replace(res, information=info[None], covariance=0.5 * (cov + cov.T)[None])
 
 
 def robust_white_fit(
@@ -528,15 +587,26 @@ def correlated_fit(
     sigma_gps_m: float,
     gps_correlation_s: float,
     passes: int = 2,
+    linearize_at: FloatArray | None = None,
+    first_pass: list[FloatArray] | None = None,
+    first_pass_steps: int | None = None,
 ) -> MapResult:
     """The generalized least-squares MAP estimate on the used ranges with the Gauss-Markov GPS error
     (module docstring): ``passes`` solves, each with the covariance at the previous estimate's lines of
-    sight (O(n) each, :class:`CorrelatedRangeProblem`)."""
+    sight (O(n) each, :class:`CorrelatedRangeProblem`); the first at ``linearize_at`` (default: the
+    start ``initial_m``). The solves start at ``initial_m``, then at the previous pass's estimate, which
+    is appended to ``first_pass`` when given (a warm start for the next call).
+
+    With ``first_pass_steps`` the first pass is at most that many Newton steps from ``initial_m``
+    (stopping at a step below the solver's ``delta_min_m``) instead of :func:`solve_map` (for a warm
+    start at the previous call's first-pass estimate: Newton converges quadratically from there)."""
     x = np.asarray(initial_m, dtype=float).reshape(1, 3)
+    point = x[0] if linearize_at is None else np.asarray(linearize_at, dtype=float).reshape(3)
     res = problem = None
-    for _ in range(passes):
+    prior_info = np.linalg.inv(np.asarray(prior.cov, dtype=float).reshape(3, 3))
+    for k in range(passes):
         problem = CorrelatedRangeProblem.at(
-            x[0],
+            point,
             sensors,
             z,
             t_s,
@@ -545,13 +615,35 @@ def correlated_fit(
             sigma_gps_enu_m=np.array([1.0, 1.0, 0.5]) * sigma_gps_m,
             correlation_s=gps_correlation_s,
         )
-        res = solve_map(problem, prior, options, initial=x)
-        x = res.estimate
+        if k == 0 and first_pass_steps is not None and passes > 1:
+            for _ in range(first_pass_steps):
+                gram = problem.gram(x[0], newton=True)
+                dev = x[0] - prior.mean[0]
+                step = np.linalg.solve(gram[:3, :3] + prior_info, gram[:3, 3] - prior_info @ dev)
+                x = _to_water_one(x + step, options)
+                if np.linalg.norm(step) <= options.delta_min_m:
+                    break
+        else:
+            res = solve_map(problem, prior, options, initial=x)
+            x = res.estimate
+        point = x[0]
+        if first_pass is not None:
+            first_pass.append(x[0].copy())
     assert res is not None and problem is not None
     # The covariance is Gauss-Newton's (J^T Sigma^-1 J + P0^-1)^-1 at the estimate, eq. (22).
-    info = problem.gram(x[0])[:3, :3] + np.linalg.inv(np.asarray(prior.cov, dtype=float).reshape(3, 3))
+    info = problem.gauss_newton_information(x[0]) + prior_info
     cov = np.linalg.inv(info)
     return dataclasses.replace(res, information=info[None], covariance=0.5 * (cov + cov.T)[None])
+
+
+def _to_water_one(x: FloatArray, options: MapOptions) -> FloatArray:
+    """A point above the surface reflected below it (as :func:`solve_map` does), ``(1, 3)``."""
+    if options.surface_z_m is None:
+        return x
+    out = x.copy()
+    z = out[0, options.surface_axis]
+    out[0, options.surface_axis] = 2.0 * options.surface_z_m - z if z > options.surface_z_m else z
+    return out
 
 
 def beacon_prior(
