@@ -106,6 +106,10 @@ class CorrelatedRangeProblem:
     axes: IntArray
     band: FloatArray
     white_var_m2: float
+    identity: bool = False
+    """Each range its own state, in time order (distinct sorted times: no scatter needed)."""
+    los_axes: FloatArray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    """``los[:, axes]``, contiguous."""
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
@@ -132,8 +136,10 @@ class CorrelatedRangeProblem:
         var = np.square(np.asarray(sigma_gps_enu_m, dtype=float))
         axes = np.flatnonzero(var > 0.0)
         k = axes.size
+        epochs_order = None
         if t.size and np.all(np.diff(t) > 0.0):  # time order, distinct (a journal beacon's ranges)
             epochs, state = t, np.arange(t.size)
+            epochs_order = state
         else:
             epochs, state = np.unique(t, return_inverse=True)
         p = epochs.size
@@ -149,23 +155,32 @@ class CorrelatedRangeProblem:
             q = np.concatenate([np.ones(1), one_minus])[:, None] * d[None, :]  # (p, k)
             diag = 1.0 / q
             diag[:-1] += (phi**2 / one_minus)[:, None] / d[None, :]
-            hk = h[:, axes]
-            outer = hk[:, :, None] * hk[:, None, :] / s2
-            block = np.zeros((p, k, k))
+            hk = h[:, axes] if p == t.size else np.zeros((p, k))
             if p == t.size:  # distinct epochs (the journal's case): one state per range
-                block[state] = outer
+                hk = hk if epochs_order is not None else hk[np.argsort(state)]
+                band[0] = (diag + hk * hk / s2).reshape(-1)
+                for off in range(1, k):
+                    sub = np.zeros((p, k))
+                    sub[:, : k - off] = hk[:, off:] * hk[:, : k - off] / s2
+                    band[off] = sub.reshape(-1)
             else:
-                np.add.at(block, state, outer)
-            band[0] = (diag + np.diagonal(block, axis1=1, axis2=2)).reshape(-1)
-            for off in range(1, k):
-                sub = np.zeros((p, k))
-                sub[:, : k - off] = np.diagonal(block, offset=-off, axis1=1, axis2=2)
-                band[off] = sub.reshape(-1)
+                hu = h[:, axes]
+                block = np.zeros((p, k, k))
+                np.add.at(block, state, hu[:, :, None] * hu[:, None, :] / s2)
+                band[0] = (diag + np.diagonal(block, axis1=1, axis2=2)).reshape(-1)
+                for off in range(1, k):
+                    sub = np.zeros((p, k))
+                    sub[:, : k - off] = np.diagonal(block, offset=-off, axis1=1, axis2=2)
+                    band[off] = sub.reshape(-1)
             cross = np.zeros((p, k))
             cross[:-1] = -(phi / one_minus)[:, None] / d[None, :]
             band[k] = cross.reshape(-1)
             band = cholesky_banded(band, lower=True, check_finite=False)
-        return cls(sensors, np.asarray(ranges_m, dtype=float)[used], h, state, axes, band, s2, {})
+        identity = epochs_order is not None
+        return cls(
+            sensors, np.asarray(ranges_m, dtype=float)[used], h, state, axes, band, s2, identity,
+            np.ascontiguousarray(h[:, axes]), {},
+        )  # fmt: skip
 
     @property
     def batch_size(self) -> int:
@@ -189,15 +204,16 @@ class CorrelatedRangeProblem:
         y = resid / s2
         k = self.axes.size
         if k and resid.size:
-            los = self.los[:, self.axes]
-            hv = los[:, :, None] * v[:, None, :]  # (m, k, 4)
+            los = self.los_axes
             p = self.band.shape[1] // k
-            acc = np.zeros((p, k, 4))
-            if p == resid.size:  # the states in time order (several ranges may share one)
-                acc[self.state] = hv
-            else:
-                np.add.at(acc, self.state, hv)
-            u = np.asfortranarray(acc.reshape(-1, 4))
+            if self.identity:  # U = H^T V state by state, written column by column (Fortran order)
+                u = np.empty((p * k, 4), order="F")
+                for c in range(4):
+                    u[:, c] = (los * v[:, c : c + 1]).reshape(-1)
+            else:  # states shared or out of time order
+                acc = np.zeros((p, k, 4))
+                np.add.at(acc, self.state, los[:, :, None] * v[:, None, :])
+                u = np.asfortranarray(acc.reshape(-1, 4))
             # U^T M^-1 U = W^T W with W = L^-1 U: one banded triangular solve (LAPACK dtbtrs).
             w_mat, info = dtbtrs(self.band, u, uplo="L", overwrite_b=1)
             if info != 0:  # pragma: no cover - the factor is nonsingular
@@ -205,7 +221,8 @@ class CorrelatedRangeProblem:
             gram -= w_mat.T @ w_mat / s2**2
             if newton:  # y = Sigma^-1 r needs M^-1 (H^T r) = L^-T (L^-1 H^T r)
                 back, info = dtbtrs(self.band, w_mat[:, 3:4].copy(order="F"), uplo="L", trans="T")
-                w = back[:, 0].reshape(p, k)[self.state]
+                w = back[:, 0].reshape(p, k)
+                w = w if self.identity else w[self.state]
                 y = y - np.einsum("ik,ik->i", los, w) / s2**2
         gram = 0.5 * (gram + gram.T)
         self._cache["gauss-newton", x.tobytes()] = gram[:3, :3].copy()
@@ -589,7 +606,7 @@ def correlated_fit(
     passes: int = 2,
     linearize_at: FloatArray | None = None,
     first_pass: list[FloatArray] | None = None,
-    first_pass_steps: int | None = None,
+    warm_start: bool = False,
 ) -> MapResult:
     """The generalized least-squares MAP estimate on the used ranges with the Gauss-Markov GPS error
     (module docstring): ``passes`` solves, each with the covariance at the previous estimate's lines of
@@ -597,9 +614,10 @@ def correlated_fit(
     start ``initial_m``). The solves start at ``initial_m``, then at the previous pass's estimate, which
     is appended to ``first_pass`` when given (a warm start for the next call).
 
-    With ``first_pass_steps`` the first pass is at most that many Newton steps from ``initial_m``
-    (stopping at a step below the solver's ``delta_min_m``) instead of :func:`solve_map` (for a warm
-    start at the previous call's first-pass estimate: Newton converges quadratically from there)."""
+    With ``warm_start`` (``initial_m`` the previous call's first-pass estimate, a few millimetres
+    away) the passes are Newton steps instead of :func:`solve_map`: one for the first pass (it lands
+    within the square of that distance), to convergence (``delta_min_m``) for the last, falling back to
+    the solver where a step is longer than :data:`WARM_STEP_M`."""
     x = np.asarray(initial_m, dtype=float).reshape(1, 3)
     point = x[0] if linearize_at is None else np.asarray(linearize_at, dtype=float).reshape(3)
     res = problem = None
@@ -615,14 +633,11 @@ def correlated_fit(
             sigma_gps_enu_m=np.array([1.0, 1.0, 0.5]) * sigma_gps_m,
             correlation_s=gps_correlation_s,
         )
-        if k == 0 and first_pass_steps is not None and passes > 1:
-            for _ in range(first_pass_steps):
-                gram = problem.gram(x[0], newton=True)
-                dev = x[0] - prior.mean[0]
-                step = np.linalg.solve(gram[:3, :3] + prior_info, gram[:3, 3] - prior_info @ dev)
-                x = _to_water_one(x + step, options)
-                if np.linalg.norm(step) <= options.delta_min_m:
-                    break
+        warm = None
+        if warm_start:
+            warm = _newton(problem, x, prior, prior_info, options, 1 if k < passes - 1 else 4)
+        if warm is not None:
+            x, res = warm
         else:
             res = solve_map(problem, prior, options, initial=x)
             x = res.estimate
@@ -631,9 +646,56 @@ def correlated_fit(
             first_pass.append(x[0].copy())
     assert res is not None and problem is not None
     # The covariance is Gauss-Newton's (J^T Sigma^-1 J + P0^-1)^-1 at the estimate, eq. (22).
-    info = problem.gauss_newton_information(x[0]) + prior_info
+    info = problem.gauss_newton_information(res.estimate[0]) + prior_info
     cov = np.linalg.inv(info)
-    return dataclasses.replace(res, information=info[None], covariance=0.5 * (cov + cov.T)[None])
+    return dataclasses.replace(res, estimate=x, information=info[None], covariance=0.5 * (cov + cov.T)[None])
+
+
+WARM_STEP_M = 0.05
+""":func:`correlated_fit` with ``warm_start``: a Newton step longer than this falls back to
+:func:`solve_map` (the start was not close)."""
+
+
+def _newton(
+    problem: CorrelatedRangeProblem,
+    x: FloatArray,
+    prior: GaussianPrior,
+    prior_info: FloatArray,
+    options: MapOptions,
+    steps: int,
+) -> tuple[FloatArray, MapResult] | None:
+    """Up to ``steps`` Newton steps from a warm start ``x (1, 3)``, stopping after one below
+    ``delta_min_m``; None where a step is long or the Hessian not positive definite (then solve).
+    Returns the estimate and a :class:`MapResult` at the point of the last Hessian (its ``estimate``
+    is within the last, tiny, step of the returned one)."""
+    mean = np.asarray(prior.mean, dtype=float).reshape(3)
+    it = 0
+    while it < steps:
+        it += 1
+        gram = problem.gram(x[0], newton=True)
+        hess = gram[:3, :3] + prior_info
+        if np.linalg.eigvalsh(hess)[0] <= 0.0:
+            return None
+        dev = x[0] - mean
+        step = np.linalg.solve(hess, gram[:3, 3] - prior_info @ dev)
+        if np.linalg.norm(step) > WARM_STEP_M:
+            return None
+        at = x
+        x = _to_water_one(x + step, options)
+        if np.linalg.norm(step) <= options.delta_min_m:
+            break
+    cost = 0.5 * (gram[3, 3] + dev @ prior_info @ dev)
+    res = MapResult(
+        estimate=at,
+        covariance=np.zeros((1, 3, 3)),
+        information=np.zeros((1, 3, 3)),
+        iterations=np.array([it]),
+        converged=np.array([bool(np.linalg.norm(step) <= options.delta_min_m)]),
+        cost=np.array([cost]),
+        status=np.array(["converged" if np.linalg.norm(step) <= options.delta_min_m else "max-iterations"]),
+        message=np.array([""]),
+    )
+    return x, res
 
 
 def _to_water_one(x: FloatArray, options: MapOptions) -> FloatArray:

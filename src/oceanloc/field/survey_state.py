@@ -9,7 +9,7 @@ what the estimate needs:
   :func:`~oceanloc.io.usbl.align_ranges` does, to the bit) once the fix after it has arrived. A fix that
   arrives out of time order re-aligns the ranges it brackets, and their beacon is then fitted afresh;
 * only a beacon that received aligned ranges is re-estimated, warm-started from its previous estimate
-  (once it has :data:`FRESH_BELOW` ranges and a trusted ellipse; before, afresh as the batch does):
+  (once it has :data:`FRESH_BELOW` ranges; before, afresh as the batch does):
   the outlier rule (:func:`~oceanloc.estimation.range_logs.robust_white_fit`) keeps the exclusions made
   so far and tests the new ranges (ranges excluded earlier whose residual is now below the threshold are
   given back first, so the mask is the one-shot rule's fixed point), then one generalized least-squares
@@ -65,9 +65,9 @@ GPS_CORRELATION_S = 60.0
 defaults, which :func:`~oceanloc.field.survey_journal.survey_estimates` uses."""
 
 FRESH_BELOW = 500
-"""A beacon with fewer aligned ranges than this, or whose ellipse is not trusted yet, is fitted afresh
-from its prior each epoch, exactly as the batch estimate (cheap while it has few ranges): a warm start
-is taken only where the problem has one minimum, so it cannot end in another one than the batch."""
+"""A beacon with fewer aligned ranges than this is fitted afresh from its prior each epoch, exactly as
+the batch estimate (cheap while it has few ranges): with few ranges the problem can have several minima
+(a mirror image, a flat valley) and a warm start could settle in another one than the batch's."""
 
 
 class _Rows:
@@ -354,7 +354,7 @@ class SurveyState:
         prior = beacon_prior(sensors, z, surface, s.prior_sigma_enu_m, s.prior_depth_m)
         opts = MapOptions(surface_z_m=surface)
         cap = int(MAX_OUTLIER_FRACTION * z.size) + 1
-        tr.fresh = tr.fresh or z.size < FRESH_BELOW or tr.check is None or not tr.check[2]
+        tr.fresh = tr.fresh or z.size < FRESH_BELOW
         if tr.fresh or tr.white_m is None:
             fit = robust_white_fit(
                 sensors, z, s.sigma_range_m, prior, opts, initial_m=prior.mean[0], max_removals=cap
@@ -380,7 +380,7 @@ class SurveyState:
             initial_m=white if tr.fresh or tr.first_pass_m is None else tr.first_pass_m,
             sigma_range_m=s.sigma_range_m, sigma_gps_m=SIGMA_GPS_M, gps_correlation_s=GPS_CORRELATION_S,
             linearize_at=white, first_pass=first,
-            first_pass_steps=None if tr.fresh or tr.first_pass_m is None else 4,
+            warm_start=not (tr.fresh or tr.first_pass_m is None),
         )  # fmt: skip
         tr.first_pass_m = first[0].copy() if first else None
         x = res.estimate[0]
