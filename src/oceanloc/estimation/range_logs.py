@@ -435,8 +435,14 @@ def robust_white_fit(
         wr = np.where(used, r0, 0.0)
         sum_rr, sum_rg, sum_gg = float(wr @ r0), wr @ g, (g * used[:, None]).T @ g
         n_used = int(used.sum())
-        if not refined:  # a Gauss-Newton step at the new reference (converged once it is tiny)
-            step = gn_step((sum_rr, sum_rg, sum_gg), x_ref)
+        if not refined:  # a Newton step at the new reference (converged once it is tiny)
+            c = wr / np.where(rho > 0.0, rho, np.inf)
+            curv = np.eye(3) * c.sum() - (g * c[:, None]).T @ g  # sum_i r_i (I - g_i g_i^T) / rho_i
+            hess = (sum_gg - curv) * inv_s2 + prior_info
+            if np.linalg.eigvalsh(hess)[0] > 0.0:
+                step = np.linalg.solve(hess, -sum_rg * inv_s2 - prior_info @ (x_ref - mean))
+            else:
+                step = gn_step((sum_rr, sum_rg, sum_gg), x_ref)
             if np.linalg.norm(step) > 0.5 * REBASE_STEP_M:  # far: a full solve
                 res = _solve(sensors, z, sigma_m, used, prior, options, x)
                 x, solved, refined = res.estimate[0].copy(), True, True

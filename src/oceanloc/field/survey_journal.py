@@ -308,9 +308,11 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     if records.n_fixes == 0:
         raise DataError("no GPS fix in the journal yet: nothing to estimate")
     origin = survey_origin(records, settings)
+    track = geodetic_to_enu(records.lat_deg, records.lon_deg, records.h_m, origin).reshape(-1, 3)
     aligned = align_ranges(
-        records.gps_log(), records.range_log(), origin=origin, max_gap_s=settings.max_gap_s
-    )
+        records.gps_log(), records.range_log(), origin=origin, max_gap_s=settings.max_gap_s,
+        track_enu_m=track,
+    )  # fmt: skip
     status = np.full(records.n_ranges, RANGE_STATUS.index("no-gps"), dtype=np.int64)
     ids, counts = np.unique(aligned.beacon, return_counts=True)
     ready = ids[counts >= MIN_RANGES]
@@ -350,7 +352,7 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
         residual_rms_m=np.array([e.residual_rms_m for e in found], dtype=float),
         waiting_beacons=wait_ids,
         waiting_ranges=np.array([waiting[int(b)] for b in wait_ids], dtype=np.int64),
-        track_enu_m=geodetic_to_enu(records.lat_deg, records.lon_deg, records.h_m, origin).reshape(-1, 3),
+        track_enu_m=track,
         range_status=status,
         trusted=check.trusted,
         linearity=check.statistic,
