@@ -143,7 +143,7 @@ class SurveyState:
         self._enu = _Rows(3)
         self._head = _Rows(2)  # t of the fix it follows, heading (order of arrival within a time)
         self._rng = _Rows(3)  # t, beacon, range: every range held, aligned or not (journal order)
-        self._pending = np.zeros(0, dtype=np.int64)  # rows of _rng not aligned yet
+        self._pending = np.zeros((0, 3))  # ranges (t, beacon, range) not aligned yet
         self._beacons: dict[int, _Beacon] = {}
         self._estimates: SurveyEstimates | None = None
 
@@ -252,26 +252,22 @@ class SurveyState:
         keep = np.concatenate([[True], (np.diff(rows[:, 0]) != 0.0) | (np.diff(rows[:, 1]) != 0.0)])
         rows = rows[keep]
         held = self._rng.view
-        if held.shape[0]:
-            # Drop keys already held (t, beacon): a re-add changes nothing.
-            both = np.concatenate([held[:, :2], rows[:, :2]])
+        lo = int(np.searchsorted(held[:, 0], rows[0, 0], side="left"))
+        hi = int(np.searchsorted(held[:, 0], rows[-1, 0], side="right"))
+        if hi > lo:  # drop keys already held (t, beacon): a re-add changes nothing
+            both = np.concatenate([held[lo:hi, :2], rows[:, :2]])
             _, first = np.unique(both, axis=0, return_index=True)
             new = np.zeros(both.shape[0], dtype=bool)
             new[first] = True
-            rows = rows[new[held.shape[0] :]]
+            rows = rows[new[hi - lo :]]
             if rows.shape[0] == 0:
                 return
-        start = self._rng.n
         if held.shape[0] and (rows[0, 0], rows[0, 1]) < (held[-1, 0], held[-1, 1]):
-            merged = np.concatenate([held, rows])
+            merged = np.concatenate([held, rows])  # journal order (t, beacon)
             self._rng.replace(merged[np.lexsort((merged[:, 1], merged[:, 0]))])
-            self._pending = np.arange(self._rng.n)
-            self._beacons = {}  # journal order changed: every beacon afresh
-            self._estimates = None
-            self._align(-np.inf, np.inf)
-            return
-        self._rng.append(rows)
-        self._pending = np.concatenate([self._pending, np.arange(start, self._rng.n)])
+        else:
+            self._rng.append(rows)
+        self._pending = np.concatenate([self._pending, rows])
         self._align(rows[0, 0], np.inf)
 
     # -- alignment --------------------------------------------------------------------------------------
@@ -281,7 +277,7 @@ class SurveyState:
         self._fix.replace(fixes)
         self._enu.replace(geodetic_to_enu(fixes[:, 1], fixes[:, 2], fixes[:, 3], self._origin).reshape(-1, 3))
         self._beacons = {}
-        self._pending = np.arange(self._rng.n)
+        self._pending = self._rng.view.copy()
         self._align(-np.inf, np.inf)
 
     def _align(self, t_lo: float, t_hi: float, *, realign: bool = False) -> None:
@@ -295,11 +291,12 @@ class SurveyState:
             moved = {int(b) for b in np.unique(self._rng.view[window, 1])}
             for b in moved:
                 self._beacons.pop(b, None)  # aligned afresh below
-            redo = np.flatnonzero(np.isin(self._rng.view[:, 1], list(moved)))
-            self._pending = np.union1d(self._pending, redo)
-        if self._pending.size == 0:
+            ids = list(moved)
+            redo = self._rng.view[np.isin(self._rng.view[:, 1], ids)]
+            self._pending = np.concatenate([self._pending[~np.isin(self._pending[:, 1], ids)], redo])
+        if self._pending.shape[0] == 0:
             return
-        rows = self._rng.view[self._pending]
+        rows = self._pending
         ft, enu = fixes[:, 0], self._enu.view
         t = rows[:, 0]
         right = np.searchsorted(ft, t, side="left")
@@ -309,8 +306,9 @@ class SurveyState:
         gap_l, gap_r = t - ft[left], ft[right_c] - t
         gap = self.settings.max_gap_s
         ok = exact | ((right > 0) & (right < ft.size) & (gap_l <= gap) & (gap_r <= gap))
-        idx, rows = self._pending[ok], rows[ok]
-        if idx.size:
+        self._pending = rows[~ok]  # a later fix (or one out of order) may still align them
+        rows = rows[ok]
+        if rows.shape[0]:
             # np.interp on the bracketing pair gives align_ranges' value to the bit.
             pos = np.stack([np.interp(rows[:, 0], ft, enu[:, k]) for k in range(3)], axis=1)
             for b in np.unique(rows[:, 1]).astype(np.int64):
@@ -333,7 +331,6 @@ class SurveyState:
                     tr.used.append(np.ones((key.size, 1), dtype=bool))
                 tr.dirty = True
             self._estimates = None
-        self._pending = self._pending[~ok]  # a later fix (or one out of order) may still align them
 
     # -- estimates --------------------------------------------------------------------------------------
 
