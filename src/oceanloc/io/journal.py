@@ -1,8 +1,11 @@
 """A survey journal that loses nothing: every GPS fix, heading and range appended to SQLite as it arrives.
 
-Write-ahead logging (``journal_mode=WAL``) with ``synchronous=FULL`` and one transaction per record: a
-process killed mid-write loses at most the record being written, never one already committed, and the
-journal re-opens in the state of its last commit. Records are keyed by their content's identity
+Write-ahead logging (``journal_mode=WAL``) with ``synchronous=FULL``; a record added on its own
+(:meth:`Journal.add_fix`, ...) is one transaction, a recorded file (:func:`append_gps_log`,
+:func:`append_range_log`) is written in transactions of :data:`APPEND_CHUNK` records in file order. A
+process killed mid-write loses at most the transaction being written, never one already committed, so
+what is committed of a file is always a prefix of it, and the journal re-opens in the state of its last
+commit. Records are keyed by their content's identity
 (fix: time; heading: the time of the fix it follows and its order after that fix; range: time and
 beacon), so re-adding a record already stored changes nothing (idempotent ``INSERT OR IGNORE``); the
 state read back is ordered by time, hence identical however often a stream is replayed.
@@ -654,7 +657,7 @@ class AppendCounts:
     kind : str
         ``fixes``, ``headings`` or ``ranges``.
     new : int
-        Records written (one transaction each).
+        Records written (in transactions of :data:`APPEND_CHUNK` records for a file).
     already_stored : int
         Records identical to one already in the journal (idempotent re-add; nothing written).
     conflicting : int
