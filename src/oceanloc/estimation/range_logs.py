@@ -32,8 +32,6 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import cholesky_banded
-from scipy.linalg.lapack import dtbtrs
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
@@ -130,6 +128,8 @@ class CorrelatedRangeProblem:
         ``sensor_m (n, 3)``, ``ranges_m (n,)``, ``t_s (n,)`` (seconds) and ``used (n,)``; white noise
         ``sigma_white_m``, GPS sigma per axis ``sigma_gps_enu_m (3,)`` with time constant ``correlation_s``.
         """
+        from scipy.linalg import cholesky_banded  # imported here: the command line starts without scipy
+
         sensors = np.asarray(sensor_m, dtype=float)[used]
         h = range_jacobian(point_m, sensors)
         t = np.asarray(t_s, dtype=float)[used]
@@ -193,6 +193,8 @@ class CorrelatedRangeProblem:
         ``J^T Sigma^-1 J``: minus ``sum_i y_i (I - h_i h_i^T) / rho_i`` with ``y = Sigma^-1 r`` (the
         ranges' curvature); the gradient and cost entries are unchanged.
         """
+        from scipy.linalg.lapack import dtbtrs
+
         x = np.asarray(x, dtype=float).reshape(3)
         diff = x - self.sensor_m
         rho = np.sqrt(np.einsum("ij,ij->i", diff, diff))
