@@ -129,7 +129,8 @@ WRITER_TIMEOUT_S = 120.0
 def uninterrupted(tmp_path_factory) -> tuple[Path, Path, Path]:
     """Simulated logs and the journal of one uninterrupted ``survey add`` of both: (nmea, ranges, journal)."""
     folder = tmp_path_factory.mktemp("stream")
-    nmea, ranges = _logs(folder, 400.0, seed=11)
+    # 3 hours: the add commits in transactions of APPEND_CHUNK records, so the log spans several.
+    nmea, ranges = _logs(folder, 10_800.0, seed=11)
     whole = folder / "whole.db"
     _invoke(["survey", "start", str(whole), *START])
     _invoke(["survey", "add", str(whole), "--nmea", str(nmea), "--ranges", str(ranges)])

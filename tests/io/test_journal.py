@@ -139,3 +139,69 @@ def test_write_to_a_locked_journal_is_a_data_error_and_keeps_the_state(tmp_path:
         assert j.add_fix(T1 + 1, 32.7, -117.2, 0.0)
         np.testing.assert_array_equal(j.fixes()[:, 0], [T1, T1 + 1])
     other.close()
+
+
+@pytest.mark.parametrize("chunk_size", [1, 2, 3, 1000])
+def test_chunked_appends_count_and_report_as_one_record_at_a_time(tmp_path: Path, chunk_size: int):
+    # A range log repeating a key within the file (same value: already stored; another value:
+    # conflicting, named in QC with the value stored first), appended in transactions of chunk_size
+    # records: the same counts, QC lines (in file order) and stored rows whatever the chunking.
+    from oceanloc.io.journal import append_range_log
+    from oceanloc.io.usbl import RangeLog
+
+    t = T1 + np.array([0.0, 1.0, 0.0, 0.0, 2.0, 1.0, 3.0])
+    beacon = np.array([1, 1, 1, 1, 2, 1, 1])
+    rng = np.array([10.0, 11.0, 10.0, 19.0, 12.0, 11.5, 13.0])
+    log = RangeLog(t_unix_s=t, beacon=beacon, range_m=rng, line=np.arange(2, 9), qc=QcReport())
+    with Journal.start(tmp_path / "j.db", {}) as j:
+        counts = append_range_log(j, log, "r.csv", chunk_size=chunk_size)
+        assert (counts.new, counts.already_stored, counts.conflicting) == (4, 1, 2)
+        assert [str(i) for i in log.qc.issues] == [
+            "r.csv:5: duplicate record (beacon 1 at this time is stored with 10.0 m, this line 19.0 m)",
+            "r.csv:7: duplicate record (beacon 1 at this time is stored with 11.0 m, this line 11.5 m)",
+        ]
+        np.testing.assert_array_equal(
+            j.ranges(), [[T1, 1, 10.0], [T1 + 1, 1, 11.0], [T1 + 2, 2, 12.0], [T1 + 3, 1, 13.0]]
+        )
+        again = append_range_log(j, log, "r.csv", chunk_size=chunk_size)
+        assert (again.new, again.already_stored, again.conflicting) == (0, 5, 2)
+
+
+def test_killed_bulk_add_commits_a_prefix_of_the_log(tmp_path: Path):
+    # A real process appending a long range log in transactions of 500 records, killed (SIGKILL) once
+    # the first are committed: what is stored is a prefix of the log; appending the log again stores
+    # exactly the log.
+    path = tmp_path / "bulk.db"
+    Journal.start(path, {}).close()
+    writer = """
+import sys
+import numpy as np
+from oceanloc.io.journal import Journal, append_range_log
+from oceanloc.io.qc import QcReport
+from oceanloc.io.usbl import RangeLog
+n = 400_000
+k = np.arange(n)
+log = RangeLog(t_unix_s=1.5e9 + 0.5 * k, beacon=1 + k % 3, range_m=10.0 + 1e-5 * k, line=k, qc=QcReport())
+with Journal.open(sys.argv[1]) as j:
+    append_range_log(j, log, "r.csv", chunk_size=500)
+"""
+    proc = subprocess.Popen([sys.executable, "-c", writer, str(path)])
+    deadline = time.monotonic() + 120.0
+    with Journal.open(path) as j:
+        while j.count("ranges") == 0 and time.monotonic() < deadline:
+            assert proc.poll() is None, "the writer finished before it could be killed"
+            time.sleep(0.002)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n = 400_000
+    with Journal.open(path) as j:
+        cut = j.ranges()
+    m = cut.shape[0]
+    assert 0 < m < n and m % 500 == 0  # whole transactions only
+    np.testing.assert_array_equal(cut[:, 0], 1.5e9 + 0.5 * np.arange(m))
+    np.testing.assert_array_equal(cut[:, 1], 1 + np.arange(m) % 3)
+    proc = subprocess.run([sys.executable, "-c", writer, str(path)], check=True)
+    with Journal.open(path) as j:
+        whole = j.ranges()
+    np.testing.assert_array_equal(whole[:, 0], 1.5e9 + 0.5 * np.arange(n))
+    np.testing.assert_array_equal(whole[:, 2], 10.0 + 1e-5 * np.arange(n))

@@ -1,7 +1,8 @@
 """``oceanloc survey``: a field survey journal (start, add, check, next, status, export).
 
-Every fix, heading and range goes into an SQLite journal, one transaction per record
-(:mod:`oceanloc.io.journal`); the estimates and the next waypoint are computed from the journal alone
+Every fix, heading and range goes into an SQLite journal (:mod:`oceanloc.io.journal`: files in
+transactions of 2,000 records in file order, so a killed add leaves a prefix of them committed); the
+estimates and the next waypoint are computed from the journal alone
 (:mod:`oceanloc.field.survey_journal`), so a killed process loses nothing committed and a re-run gives the
 same numbers.
 """
@@ -129,7 +130,8 @@ def add(
         list[str] | None, typer.Option("--range", help="One range T,BEACON,R (R in metres; repeat).")
     ] = None,
 ) -> None:
-    """Append records, one transaction each; bad lines are skipped and listed, re-adds change nothing."""
+    """Append records (files in transactions of 2,000 records in file order: a killed add leaves a
+    prefix committed); bad lines are skipped and listed, re-adds change nothing."""
     res = add_to_journal(
         journal,
         nmea=nmea or (),

@@ -308,9 +308,11 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
     if records.n_fixes == 0:
         raise DataError("no GPS fix in the journal yet: nothing to estimate")
     origin = survey_origin(records, settings)
+    track = geodetic_to_enu(records.lat_deg, records.lon_deg, records.h_m, origin).reshape(-1, 3)
     aligned = align_ranges(
-        records.gps_log(), records.range_log(), origin=origin, max_gap_s=settings.max_gap_s
-    )
+        records.gps_log(), records.range_log(), origin=origin, max_gap_s=settings.max_gap_s,
+        track_enu_m=track,
+    )  # fmt: skip
     status = np.full(records.n_ranges, RANGE_STATUS.index("no-gps"), dtype=np.int64)
     ids, counts = np.unique(aligned.beacon, return_counts=True)
     ready = ids[counts >= MIN_RANGES]
@@ -355,7 +357,7 @@ def survey_estimates(records: JournalRecords, settings: JournalSettings) -> Surv
         residual_rms_m=np.array([e.residual_rms_m for e in found], dtype=float),
         waiting_beacons=wait_ids,
         waiting_ranges=np.array([waiting[int(b)] for b in wait_ids], dtype=np.int64),
-        track_enu_m=geodetic_to_enu(records.lat_deg, records.lon_deg, records.h_m, origin).reshape(-1, 3),
+        track_enu_m=track,
         range_status=status,
         trusted=check.trusted,
         linearity=check.statistic,
@@ -608,8 +610,10 @@ def add_to_journal(
     manual_ranges: Sequence[tuple[float, int, float]] = (),
 ) -> JournalAddition:
     """Append GPS logs, range logs, fixes ``(t, lat, lon, h)`` and ranges ``(t, beacon, r)`` to a started
-    journal, one transaction per record. Everything is read and checked before the first write, so an
-    error leaves the journal as it was; records already stored change nothing.
+    journal: files in transactions of :data:`~oceanloc.io.journal.APPEND_CHUNK` records in file order (a
+    killed process leaves a prefix of the files committed), ``fixes``/``manual_ranges`` one transaction
+    per record. Everything is read and checked before the first write, so an error leaves the journal as
+    it was; records already stored change nothing.
 
     Raises
     ------
@@ -650,10 +654,10 @@ def add_to_journal(
             same_range = lambda r: j.range_at(r[0], r[1]) == r[2]  # noqa: E731
             counts = _add_manual(manual_ranges, j.add_range, same_range, "ranges", conflicts)
             sources.append(("--range", str(counts)))
-        rec = j.records()
+        n = {table: j.count_valid(table) for table in ("fixes", "headings", "ranges")}
     return JournalAddition(
-        sources=tuple(sources), conflicts=tuple(conflicts), qc=qc, n_fixes=rec.n_fixes,
-        n_headings=int(rec.heading_deg.size), n_ranges=rec.n_ranges,
+        sources=tuple(sources), conflicts=tuple(conflicts), qc=qc, n_fixes=n["fixes"],
+        n_headings=n["headings"], n_ranges=n["ranges"],
     )  # fmt: skip
 
 
@@ -691,17 +695,18 @@ class JournalStatus:
         base = {
             "journal": self.path,
             "fixes": rec.n_fixes,
-            "headings": int(rec.heading_deg.size),
+            "headings": rec.n_headings,
             "ranges_recorded": rec.n_ranges,
         }
         return base | (self.estimates.to_record() if self.estimates is not None else {"beacons": []})
 
 
 def journal_status(path: str | Path) -> JournalStatus:
-    """Read a journal and estimate its beacons (``survey status``)."""
+    """Read a journal and estimate its beacons (``survey status``; the headings are counted, and only the
+    latest read)."""
     with Journal.open(path) as j:
         settings = JournalSettings.from_meta(j.meta(), str(path))
-        rec = j.records()
+        rec = j.records(headings=False)
     est = survey_estimates(rec, settings) if rec.n_fixes else None
     return JournalStatus(path=str(path), settings=settings, records=rec, estimates=est)
 
@@ -711,5 +716,5 @@ def journal_next_waypoint(path: str | Path, *, seed: int = 0) -> Waypoint:
     generator seeded by ``seed`` and the record counts, so a re-run on the same journal repeats."""
     with Journal.open(path) as j:
         settings = JournalSettings.from_meta(j.meta(), str(path))
-        rec = j.records()
+        rec = j.records(headings=False)
     return next_waypoint(rec, settings, rng=np.random.default_rng([seed, rec.n_fixes, rec.n_ranges]))

@@ -1,8 +1,11 @@
 """A survey journal that loses nothing: every GPS fix, heading and range appended to SQLite as it arrives.
 
-Write-ahead logging (``journal_mode=WAL``) with ``synchronous=FULL`` and one transaction per record: a
-process killed mid-write loses at most the record being written, never one already committed, and the
-journal re-opens in the state of its last commit. Records are keyed by their content's identity
+Write-ahead logging (``journal_mode=WAL``) with ``synchronous=FULL``; a record added on its own
+(:meth:`Journal.add_fix`, ...) is one transaction, a recorded file (:func:`append_gps_log`,
+:func:`append_range_log`) is written in transactions of :data:`APPEND_CHUNK` records in file order. A
+process killed mid-write loses at most the transaction being written, never one already committed, so
+what is committed of a file is always a prefix of it, and the journal re-opens in the state of its last
+commit. Records are keyed by their content's identity
 (fix: time; heading: the time of the fix it follows and its order after that fix; range: time and
 beacon), so re-adding a record already stored changes nothing (idempotent ``INSERT OR IGNORE``); the
 state read back is ordered by time, hence identical however often a stream is replayed.
@@ -26,6 +29,7 @@ sent, link states, start and stop, as JSON), so a survey can be audited and repl
 
 from __future__ import annotations
 
+import itertools
 import json
 import logging
 import math
@@ -140,9 +144,15 @@ def heading_problem(t_unix_s: object, seq: object, heading_deg: object) -> str |
 
 
 def _sql_in(column: str, bounds: tuple[float, float], *, open_low: bool = False) -> str:
-    """SQL true only for a number in the bounds (false for NULL, text, blobs, inf beyond them)."""
-    low = f"{column} > {bounds[0]!r}" if open_low else f"{column} >= {bounds[0]!r}"
-    return f"(typeof({column}) IN ('real', 'integer') AND {low} AND {column} <= {bounds[1]!r})"
+    """SQL true only for a number in the bounds (false for NULL, text, blobs, inf beyond them).
+
+    No ``typeof`` test is needed: SQLite orders every INTEGER or REAL value below every TEXT or BLOB
+    value, so text and blobs fail ``<= upper bound``, and NULL (NaN is stored as NULL) makes the whole
+    condition NULL (read as false through ``IFNULL``).
+    """
+    if open_low:
+        return f"({column} > {bounds[0]!r} AND {column} <= {bounds[1]!r})"
+    return f"({column} BETWEEN {bounds[0]!r} AND {bounds[1]!r})"
 
 
 _VALID_SQL: dict[str, str] = {
@@ -562,10 +572,24 @@ class Journal:
         )
         return float(rows[0][0]) if rows else None
 
-    def _valid(self, table: str) -> FloatArray:
-        where, order = f"IFNULL({_VALID_SQL[table]}, 0)", _ORDER[table]
-        rows = self._query(f"SELECT {_COLUMNS[table]} FROM {table} WHERE {where} ORDER BY {order}")
-        return np.asarray(rows, dtype=float).reshape(-1, 3 + (table == "fixes"))
+    def _valid(self, table: str, where: str = "") -> FloatArray:
+        """The valid rows of a table (and ``where``), ordered, as floats: one query read straight into
+        numpy (no per-row Python objects beyond the cursor's tuples)."""
+        cond, order = f"IFNULL({_VALID_SQL[table]}, 0)" + (f" AND {where}" if where else ""), _ORDER[table]
+        width = 3 + (table == "fixes")
+        row = np.dtype([(f"c{k}", np.float64) for k in range(width)])
+        try:
+            cur = self._db.execute(f"SELECT {_COLUMNS[table]} FROM {table} WHERE {cond} ORDER BY {order}")
+            out = np.fromiter(cur, dtype=row)
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        return out.view(np.float64).reshape(-1, width)
+
+    def count(self, table: str) -> int:
+        """Rows stored in ``fixes``, ``headings`` or ``ranges`` (valid or not)."""
+        if table not in _COLUMNS:
+            raise ValueError(f"no journal table {table!r}")
+        return int(self._query(f"SELECT count(*) FROM {table}")[0][0])
 
     def fixes(self) -> FloatArray:
         """All valid fixes ordered by time, ``(n, 4)``: t, lat, lon, h (see :meth:`invalid_records`)."""
@@ -579,10 +603,12 @@ class Journal:
         """All valid headings ordered by time and order, ``(h, 3)``: t, seq, heading (deg from north)."""
         return self._valid("headings")
 
-    def invalid_records(self) -> list[InvalidRecord]:
+    def invalid_records(
+        self, tables: tuple[str, ...] = ("fixes", "headings", "ranges")
+    ) -> list[InvalidRecord]:
         """Every stored row that fails the checks on the way in (out of range, not a number), by table."""
         out = []
-        for table in ("fixes", "headings", "ranges"):
+        for table in tables:
             rows = self._query(
                 f"SELECT rowid, {_COLUMNS[table]} FROM {table} WHERE NOT IFNULL({_VALID_SQL[table]}, 0) "
                 "ORDER BY rowid"
@@ -615,18 +641,31 @@ class Journal:
         problems = [] if pages == ["ok"] else [f"{self.path}: damaged: {p}" for p in pages]
         return problems + [f"{self.path}: {r}" for r in self.invalid_records()]
 
-    def records(self) -> JournalRecords:
+    def records(self, *, headings: bool = True) -> JournalRecords:
         """Every valid record, read in one read transaction (a consistent snapshot).
 
         Invalid stored rows (see :meth:`invalid_records`) are skipped, listed in
         :attr:`JournalRecords.invalid` and reported once as a logged warning, so every command reading the
-        journal still works.
+        journal still works. The check is SQL's: one query per table reads the valid rows, and the
+        invalid ones are listed only when a table holds more rows than that.
+
+        With ``headings=False`` only the headings recorded since the second-to-last fix are read (all
+        that :func:`~oceanloc.field.survey_journal.vehicle_yaw` looks at);
+        :attr:`JournalRecords.n_headings` is still the journal's count.
         """
         try:
             with self._db:
                 self._db.execute("BEGIN")
-                fixes, ranges, headings = self.fixes(), self.ranges(), self.headings()
-                invalid = self.invalid_records()
+                fixes, ranges = self.fixes(), self.ranges()
+                if headings or fixes.shape[0] < 2:
+                    heads = self.headings()
+                    n_head = heads.shape[0]
+                else:
+                    heads = self._valid("headings", f"t >= {float(fixes[-2, 0])!r}")
+                    n_head = self.count_valid("headings")
+                valid = {"fixes": fixes.shape[0], "headings": n_head, "ranges": ranges.shape[0]}
+                bad = tuple(t for t in ("fixes", "headings", "ranges") if self.count(t) != valid[t])
+                invalid = self.invalid_records(bad)
         except sqlite3.Error as exc:
             raise JournalError(self._explain(exc, "cannot read the journal")) from None
         if invalid:
@@ -646,10 +685,17 @@ class Journal:
             range_t_unix_s=ranges[:, 0],
             beacon=ranges[:, 1].astype(np.int64),
             range_m=ranges[:, 2],
-            heading_t_unix_s=headings[:, 0],
-            heading_deg=headings[:, 2],
+            heading_t_unix_s=heads[:, 0],
+            heading_deg=heads[:, 2],
             invalid=tuple(str(r) for r in invalid),
+            heading_count=None if headings else n_head,
         )
+
+    def count_valid(self, table: str) -> int:
+        """Valid rows in ``fixes``, ``headings`` or ``ranges`` (counted by SQL, checks as on the way in)."""
+        if table not in _COLUMNS:
+            raise ValueError(f"no journal table {table!r}")
+        return int(self._query(f"SELECT count(*) FROM {table} WHERE IFNULL({_VALID_SQL[table]}, 0)")[0][0])
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -668,6 +714,9 @@ class JournalRecords:
     invalid : tuple of str
         Stored rows skipped because they fail the checks on the way in (see
         :meth:`Journal.invalid_records`); empty for a journal written by this version.
+    heading_count : int or None
+        Valid headings in the journal when only the latest were read
+        (``Journal.records(headings=False)``); None when ``heading_deg`` holds them all.
     """
 
     fix_t_unix_s: FloatArray
@@ -680,10 +729,16 @@ class JournalRecords:
     heading_t_unix_s: FloatArray
     heading_deg: FloatArray
     invalid: tuple[str, ...] = ()
+    heading_count: int | None = None
 
     @property
     def n_fixes(self) -> int:
         return int(self.fix_t_unix_s.size)
+
+    @property
+    def n_headings(self) -> int:
+        """Valid headings in the journal (also when only the latest were read)."""
+        return int(self.heading_deg.size) if self.heading_count is None else self.heading_count
 
     @property
     def n_ranges(self) -> int:
@@ -722,7 +777,7 @@ class AppendCounts:
     kind : str
         ``fixes``, ``headings`` or ``ranges``.
     new : int
-        Records written (one transaction each).
+        Records written (in transactions of :data:`APPEND_CHUNK` records for a file).
     already_stored : int
         Records identical to one already in the journal (idempotent re-add; nothing written).
     conflicting : int
@@ -767,16 +822,136 @@ def _reject(
         qc.add(source, int(lines[k]), "out of range", problem(*values) or "not a number")
 
 
+APPEND_CHUNK = 2_000
+"""Records per transaction of :func:`append_gps_log` and :func:`append_range_log` (a transaction costs
+about a millisecond, a record a few microseconds)."""
+
+_KEY_WIDTH = {"fixes": 1, "headings": 2, "ranges": 2}
+
+
+@dataclass(slots=True)
+class _Chunk:
+    """One table's rows of a chunk in record order: their values and where each stands in the log."""
+
+    table: str
+    rows: FloatArray
+    pos: IntArray
+    lines: IntArray
+
+
+def _classify(db: sqlite3.Connection, chunk: _Chunk) -> tuple[BoolArray, BoolArray, FloatArray, list]:
+    """Which rows of the chunk are new (the first of their key, not stored) and which repeat the record of
+    their key exactly; per row the values it is compared with (stored, or an earlier row's) and the stored
+    row as read (None for an earlier row of the chunk)."""
+    rows, kw = chunk.rows, _KEY_WIDTH[chunk.table]
+    if rows.shape[0] == 0:
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool), rows, []
+    stored_raw = db.execute(
+        f"SELECT {_COLUMNS[chunk.table]} FROM {chunk.table} WHERE t BETWEEN ? AND ?",
+        (float(rows[:, 0].min()), float(rows[:, 0].max())),
+    ).fetchall()
+    width = rows.shape[1]
+    try:
+        stored = np.array(stored_raw, dtype=float).reshape(-1, width)
+    except (TypeError, ValueError):  # an invalid stored row (text, NULL): its values compare as NaN
+        stored = np.array([[_num(v) for v in r] for r in stored_raw], dtype=float).reshape(-1, width)
+    both = np.concatenate([stored, rows])
+    _, first, inverse = np.unique(both[:, :kw], axis=0, return_index=True, return_inverse=True)
+    ref = first[inverse.reshape(-1)[stored.shape[0] :]]  # first row (stored, then chunk) of each key
+    new = ref == np.arange(rows.shape[0]) + stored.shape[0]
+    ref_values = both[ref]
+    same = ~new & np.all(ref_values[:, kw:] == rows[:, kw:], axis=1)
+    raw = [stored_raw[i] if i < len(stored_raw) else None for i in ref]
+    return new, same, ref_values, raw
+
+
+def _write_chunk(journal: Journal, parts: list[_Chunk]) -> tuple[dict[str, list[int]], list[tuple]]:
+    """Insert the new rows of one chunk (several tables) in one transaction; per table the counts
+    ``[new, already stored, conflicting]``, and the conflicts as ``(pos, line, message)``."""
+    counts: dict[str, list[int]] = {}
+    conflicts: list[tuple] = []
+    try:
+        with journal._db:
+            journal._db.execute("BEGIN IMMEDIATE")
+            for part in parts:
+                new, same, ref_values, raw = _classify(journal._db, part)
+                values = part.rows[new].tolist()
+                if part.table != "fixes":  # beacon id, heading order: integers
+                    values = [(r[0], int(r[1]), r[2]) for r in values]
+                marks = ", ".join("?" * part.rows.shape[1])
+                journal._db.executemany(f"INSERT INTO {part.table} VALUES ({marks})", values)
+                bad = ~new & ~same
+                counts[part.table] = [int(new.sum()), int(same.sum()), int(bad.sum())]
+                for i in np.flatnonzero(bad):
+                    stored = raw[i] if raw[i] is not None else tuple(ref_values[i].tolist())
+                    message = _conflict_message(part.table, part.rows[i], stored)
+                    conflicts.append((int(part.pos[i]), int(part.lines[i]), message))
+    except sqlite3.Error as exc:
+        if journal.read_only:
+            raise JournalError(
+                f"{journal.path}: the journal is read-only here: {journal._read_only_reason()}"
+            ) from None
+        raise JournalError(journal._explain(exc, "cannot write to the journal")) from None
+    return counts, conflicts
+
+
+def _conflict_message(table: str, row: FloatArray, stored: tuple) -> str:
+    """What ``duplicate record`` says: the stored values and this line's."""
+    if table == "fixes":
+        values = tuple(row[1:].tolist())
+        return f"a fix at this time is stored with other values: {tuple(stored[1:])}, this line {values}"
+    if table == "headings":
+        return (
+            f"heading {int(row[1]) + 1} after the fix at {row[0]:.3f} s is stored with {stored[2]} deg, "
+            f"this line {float(row[2])} deg"
+        )
+    return f"beacon {int(row[1])} at this time is stored with {stored[2]} m, this line {float(row[2])} m"
+
+
+def _append_chunked(
+    journal: Journal, parts: list[_Chunk], qc: QcReport, source: str | Path, chunk_size: int
+) -> dict[str, list[int]]:
+    """Write the records of ``parts`` (each table's rows in log order, ``pos`` their place in the log)
+    in chunks of ``chunk_size`` consecutive records, one transaction each, so what is committed is
+    always a prefix of the log; conflicts go to ``qc`` in log order. Per table ``[new, old, conflicting]``.
+    """
+    total = {p.table: [0, 0, 0] for p in parts}
+    all_pos = np.sort(np.concatenate([p.pos for p in parts]))
+    if all_pos.size == 0:
+        return total
+    bounds = [*all_pos[::chunk_size].tolist(), int(all_pos[-1]) + 1]
+    for lo, hi in itertools.pairwise(bounds):
+        chunk = []
+        for p in parts:
+            a, b = np.searchsorted(p.pos, [lo, hi], side="left")
+            chunk.append(_Chunk(p.table, p.rows[a:b], p.pos[a:b], p.lines[a:b]))
+        counts, conflicts = _write_chunk(journal, chunk)
+        for table, c in counts.items():
+            total[table] = [u + v for u, v in zip(total[table], c, strict=True)]
+        for _, line, message in sorted(conflicts, key=lambda c: c[0]):
+            qc.add(source, line, "duplicate record", message)
+    return total
+
+
 def append_gps_log(
-    journal: Journal, log: GpsLog, source: str | Path, qc: QcReport | None = None
+    journal: Journal,
+    log: GpsLog,
+    source: str | Path,
+    qc: QcReport | None = None,
+    *,
+    chunk_size: int = APPEND_CHUNK,
 ) -> tuple[AppendCounts, AppendCounts]:
-    """Append a GPS log record by record, in log order: each fix, then the headings that follow it.
+    """Append a GPS log in log order: each fix, then the headings that follow it.
 
     The whole log is checked before the first write: a fix or heading out of range (see
     :func:`fix_problem`) is not written and is recorded in ``qc`` (``out of range``, naming ``source``
     and the line). A heading read before any fix has no time (``-inf``) and is not stored. A fix or
     heading whose key is stored with another value is kept as stored and recorded in ``qc``
     (``duplicate record``, with both values).
+
+    The records are written in transactions of ``chunk_size`` records in log order (``executemany``
+    inside one ``BEGIN IMMEDIATE``): a process killed mid-append leaves a prefix of the log committed,
+    and appending the log again adds the rest (records already stored change nothing).
 
     Returns
     -------
@@ -801,69 +976,56 @@ def append_gps_log(
     if not (fix_ok.all() and head_ok.all()):
         _reject(qc, source, log.line, fix_ok, fix_problem, (log.t_unix_s, log.lat_deg, log.lon_deg, log.h_m))
         _reject(qc, source, head_line, head_ok, heading_problem, (head_t, seq, head_deg))
-    fix_new = fix_old = fix_bad = 0
-    head_new = head_old = head_bad = 0
-    j = 0
-    for k in range(log.n_fixes + 1):
-        if k < log.n_fixes:
-            t = float(log.t_unix_s[k])
-            values = (float(log.lat_deg[k]), float(log.lon_deg[k]), float(log.h_m[k]))
-            if not fix_ok[k]:
-                pass
-            elif journal.add_fix(t, *values):
-                fix_new += 1
-            elif (stored := journal.fix_at(t)) == values:
-                fix_old += 1
-            else:
-                fix_bad += 1
-                qc.add(
-                    source,
-                    int(log.line[k]),
-                    "duplicate record",
-                    f"a fix at this time is stored with other values: {stored}, this line {values}",
-                )
-        end = head_t.size if k == log.n_fixes else int(np.searchsorted(head_t, t, side="right"))
-        for i in range(j, end):
-            h_t, h_seq, h_deg = float(head_t[i]), int(seq[i]), float(head_deg[i])
-            if not head_ok[i]:
-                continue
-            if journal.add_heading(h_t, h_seq, h_deg):
-                head_new += 1
-            elif (stored_deg := journal.heading_at(h_t, h_seq)) == h_deg:
-                head_old += 1
-            else:
-                head_bad += 1
-                qc.add(
-                    source,
-                    int(head_line[i]),
-                    "duplicate record",
-                    f"heading {h_seq + 1} after the fix at {h_t:.3f} s is stored with {stored_deg} deg, "
-                    f"this line {h_deg} deg",
-                )
-        j = max(j, end)
+    # Log order: fix k, then the headings up to its time not yet written (their index below next_j[k]).
+    n = log.n_fixes
+    end = np.searchsorted(head_t, log.t_unix_s, side="right")
+    next_j = np.maximum.accumulate(end) if n else np.zeros(0, dtype=np.int64)
+    before = np.concatenate([[0], next_j[:-1]]) if n else np.zeros(0, dtype=np.int64)
+    fix_pos = np.arange(n) + before
+    after_fix = np.searchsorted(next_j, np.arange(head_t.size), side="right")  # fix k the heading follows
+    head_pos = np.minimum(after_fix + 1, n) + np.arange(head_t.size)
+    fixes = np.column_stack([log.t_unix_s, log.lat_deg, log.lon_deg, log.h_m])
+    heads = np.column_stack([head_t, seq.astype(float), head_deg])
+    counts = _append_chunked(
+        journal,
+        [
+            _Chunk("fixes", fixes[fix_ok], fix_pos[fix_ok], np.asarray(log.line)[fix_ok]),
+            _Chunk("headings", heads[head_ok], head_pos[head_ok], head_line[head_ok]),
+        ],
+        qc,
+        source,
+        chunk_size,
+    )
+    fix_c, head_c = counts["fixes"], counts["headings"]
     return (
         AppendCounts(
             kind="fixes",
-            new=fix_new,
-            already_stored=fix_old,
-            conflicting=fix_bad,
+            new=fix_c[0],
+            already_stored=fix_c[1],
+            conflicting=fix_c[2],
             rejected=int((~fix_ok).sum()),
         ),
         AppendCounts(
             kind="headings",
-            new=head_new,
-            already_stored=head_old,
-            conflicting=head_bad,
+            new=head_c[0],
+            already_stored=head_c[1],
+            conflicting=head_c[2],
             rejected=int((~head_ok).sum()),
         ),
     )
 
 
 def append_range_log(
-    journal: Journal, log: RangeLog, source: str | Path, qc: QcReport | None = None
+    journal: Journal,
+    log: RangeLog,
+    source: str | Path,
+    qc: QcReport | None = None,
+    *,
+    chunk_size: int = APPEND_CHUNK,
 ) -> AppendCounts:
-    """Append a range log record by record, in log order; the whole log is checked before the first write
-    (see :func:`append_gps_log` on rejected and conflicting records)."""
+    """Append a range log in log order, in transactions of ``chunk_size`` records; the whole log is
+    checked before the first write (see :func:`append_gps_log` on rejected and conflicting records and on
+    the prefix committed by a killed process)."""
     qc = log.qc if qc is None else qc
     beacon = np.asarray(log.beacon)
     ok = (
@@ -876,21 +1038,11 @@ def append_range_log(
     )
     if not ok.all():
         _reject(qc, source, log.line, ok, range_problem, (log.t_unix_s, beacon, log.range_m))
-    new = old = bad = 0
-    for k in np.flatnonzero(ok):
-        t, b, rng = float(log.t_unix_s[k]), int(beacon[k]), float(log.range_m[k])
-        if journal.add_range(t, b, rng):
-            new += 1
-        elif (stored := journal.range_at(t, b)) == rng:
-            old += 1
-        else:
-            bad += 1
-            qc.add(
-                source,
-                int(log.line[k]),
-                "duplicate record",
-                f"beacon {b} at this time is stored with {stored} m, this line {rng} m",
-            )
+    rows = np.column_stack([log.t_unix_s, beacon.astype(float), log.range_m])
+    pos = np.arange(log.t_unix_s.size)
+    part = _Chunk("ranges", rows[ok], pos[ok], np.asarray(log.line)[ok])
+    c = _append_chunked(journal, [part], qc, source, chunk_size)
+    new, old, bad = c["ranges"]
     return AppendCounts(
         kind="ranges", new=new, already_stored=old, conflicting=bad, rejected=int((~ok).sum())
     )

@@ -332,20 +332,26 @@ class AlignedRanges:
 
 
 def align_ranges(
-    gps: GpsLog, ranges: RangeLog, origin: EnuOrigin | None = None, max_gap_s: float = 2.0
+    gps: GpsLog,
+    ranges: RangeLog,
+    origin: EnuOrigin | None = None,
+    max_gap_s: float = 2.0,
+    *,
+    track_enu_m: FloatArray | None = None,
 ) -> AlignedRanges:
     """Interpolate the GPS track (in ENU) to each range epoch.
 
     A range is kept only if GPS fixes exist on both sides within ``max_gap_s`` of it (linear
     interpolation between them); otherwise it is dropped and counted in ``dropped_no_gps``. The ENU
-    origin defaults to the first fix, as in the papers.
+    origin defaults to the first fix, as in the papers. ``track_enu_m (n, 3)``: the fixes already in
+    ENU of ``origin``, if the caller has them (else converted here).
     """
     if max_gap_s <= 0.0:
         raise ConfigError("max_gap_s must be positive")
     org = origin or EnuOrigin(
         lat_deg=float(gps.lat_deg[0]), lon_deg=float(gps.lon_deg[0]), h_m=float(gps.h_m[0])
     )
-    enu = geodetic_to_enu(gps.lat_deg, gps.lon_deg, gps.h_m, org)
+    enu = geodetic_to_enu(gps.lat_deg, gps.lon_deg, gps.h_m, org) if track_enu_m is None else track_enu_m
     t = ranges.t_unix_s
     right = np.searchsorted(gps.t_unix_s, t, side="left")
     left = np.clip(right - 1, 0, gps.n_fixes - 1)

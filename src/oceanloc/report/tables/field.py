@@ -256,7 +256,7 @@ def journal_status_lines(st: JournalStatus) -> list[str]:
     )
     return [
         f"survey {escape(st.path)}: {journal_settings_text(st.settings)}",
-        f"{rec.n_fixes} fixes{span}, {rec.heading_deg.size} headings, {rec.n_ranges} ranges",
+        f"{rec.n_fixes} fixes{span}, {rec.n_headings} headings, {rec.n_ranges} ranges",
     ]
 
 
