@@ -231,14 +231,14 @@ def live_rig(
     gpsd: bool = True,
     fs_gcs: bool = True,
     sitl_folder: Path | None = None,
-    cruise_speed_mps: float = 2.0,
+    cruise_speed_mps: float = 1.0,
 ):
     """Boat + gpsd (or the vehicle's telemetry when ``gpsd`` is False) + beacons, torn down on exit.
 
     With ``sitl_folder`` the boat is ArduPilot SITL (:class:`SitlBoat`, binary from ``OCEANLOC_SITL``)."""
     vport = free_port()
-    # a BlueBoat-like survey speed of 2 m/s (ArduPilot's motorboat default is 5 m/s; at ten times real
-    # time a slower boat keeps the host's timing jitter, times the wall-clock speed, small), 3 m radius
+    # a BlueBoat's slow survey speed of 1 m/s (ArduPilot's motorboat default is 5 m/s; at ten times real
+    # time a slow boat keeps the host's timing jitter, times the wall-clock speed, small), 3 m radius
     params = BoatParams(cruise_speed_mps=cruise_speed_mps)
     boat: BoatSimulator | SitlBoat
     if sitl_folder is not None:
@@ -337,11 +337,11 @@ def drop_options(drops_enu_m: dict[int, tuple[float, float, float]]) -> list[str
 def start_survey(path: Path, drops_enu_m: dict[int, tuple[float, float, float]], *extra: str) -> None:
     """``oceanloc survey start`` for the rig: the look-ahead planner (k = 3) with the boat's speed and turn
     rate in journal seconds (ten times the simulated ones), 0.3 m range sigma (the simulator's 0.1 m
-    plus the host's timing jitter times the boat's 20 m per wall-clock second; white GPS error), the
-    crew's drop positions as the prior means within 20 m (10 m in depth)."""
-    cmd = oceanloc("survey", "start", str(path), "--planner", "lookahead", "-k", "3", "--speed", "20",
+    plus the host's timing jitter times the boat's 10 m per wall-clock second; white GPS error), the
+    crew's drop positions as the prior means within 15 m (8 m in depth)."""
+    cmd = oceanloc("survey", "start", str(path), "--planner", "lookahead", "-k", "3", "--speed", "10",
                    "--period", "3", "--max-yaw-rate", "200", "--sigma-range", "0.3", "--sigma-gps", "0",
-                   "--prior-sigma", "20,20,10", "--max-gap", "1", *drop_options(drops_enu_m),
+                   "--prior-sigma", "15,15,8", "--max-gap", "1", *drop_options(drops_enu_m),
                    *extra)  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)
 

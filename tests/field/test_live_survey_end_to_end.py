@@ -42,12 +42,12 @@ from tests.field._live_rig import (
     start_survey,
 )
 
-TRANSPONDERS = {1: (60.0, 40.0, -40.0), 2: (-45.0, 75.0, -30.0)}
-DROPS = {1: (75.0, 28.0, 36.0), 2: (-60.0, 88.0, 34.0)}  # where the crew dropped them: 20 m off, depth 4 m
+TRANSPONDERS = {1: (30.0, 20.0, -20.0), 2: (-22.0, 38.0, -15.0)}
+DROPS = {1: (38.0, 14.0, 18.0), 2: (-30.0, 44.0, 17.0)}  # where the crew dropped them: 10 m off, depth 2 m
 SIGMA_RANGE_M = 0.3  # the survey's range sigma (see tests/field/_live_rig.py: start_survey)
-PRIOR_SIGMA_M = np.array([20.0, 20.0, 10.0])
-FENCE_RADIUS_M = 150.0
-RUN = ("--goal", "0.8", "--max-time", "120", "--fence-radius", str(FENCE_RADIUS_M), "--max-leg", "40",
+PRIOR_SIGMA_M = np.array([15.0, 15.0, 8.0])
+FENCE_RADIUS_M = 80.0
+RUN = ("--goal", "0.8", "--max-time", "120", "--fence-radius", str(FENCE_RADIUS_M), "--max-leg", "25",
        "--timeouts", "1,3,1", "--ping-interval", "0.1")  # fmt: skip
 
 
@@ -208,7 +208,7 @@ def test_planned_survey_stops_by_its_rule_and_survives_kill_9(tmp_path: Path, bo
     fence = fence_from_radius(origin.lat_deg, origin.lon_deg, FENCE_RADIUS_M)
     sites = [p["site"] for p in _events(journal, "plan") if p["site"]["status"] != "refused"]
     assert sites and all(bool(contains(fence, s["lat_deg"], s["lon_deg"])) for s in sites)
-    assert all(s["leg_m"] <= 40.0 + 1e-6 for s in sites)
+    assert all(s["leg_m"] <= 25.0 + 1e-6 for s in sites)
     # the status lines: one JSON object per epoch, with estimates, next site, gain and link states
     epochs = [json.loads(x) for x in lines.read_text().splitlines() if '"epoch"' in x]
     assert epochs and {"beacons", "next", "links", "latency_ms"} <= set(epochs[-1])
@@ -219,7 +219,7 @@ def test_on_the_same_time_the_planned_survey_beats_a_circle_and_a_lawnmower(tmp_
     """The time budget is counted in ping cycles (one range every 0.1 s of wall time plus its flight): the
     simulators' cadence on a loaded machine varies from run to run, the number of pings does not. The
     patterns are laid out from the drop positions, as a crew would: a circle about their centre through
-    both, and a lawnmower over the square around them (28 m between lines)."""
+    both, and a lawnmower over the square around them (14 m between lines)."""
     journal = tmp_path / "survey.db"
     with live_rig(TRANSPONDERS) as rig:
         start_survey(journal, DROPS)
@@ -232,6 +232,6 @@ def test_on_the_same_time_the_planned_survey_beats_a_circle_and_a_lawnmower(tmp_
     drops = np.array([d[:2] for d in DROPS.values()])
     centre, radius = drops.mean(axis=0), 0.5 * float(np.linalg.norm(drops[0] - drops[1]))
     circle = _fly_pattern(circle_waypoints(rig.proj, centre, radius), n)
-    mower = _fly_pattern(lawnmower_waypoints(rig.proj, centre, 70.0, 28.0), n)
+    mower = _fly_pattern(lawnmower_waypoints(rig.proj, centre, 35.0, 14.0), n)
     print(f"log det over {n} ranges: planned {planned:.2f}, circle {circle:.2f}, lawnmower {mower:.2f}")
     assert planned > circle and planned > mower

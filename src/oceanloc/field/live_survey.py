@@ -4,8 +4,9 @@
 Everything it reads goes into the survey journal (:mod:`oceanloc.io.journal`) as it arrives, one
 transaction per record, before anything is computed from it. Then, for every new range (an *epoch*):
 
-1. the beacons are re-estimated from the journal's records (:class:`EpochEstimator`: the same robust
-   MAP and linearization check as ``survey status``);
+1. the beacons are re-estimated (:class:`EpochEstimator`: the journal's records held in memory by
+   :class:`~oceanloc.field.survey_state.SurveyState`, only the beacon that got the range re-fitted from
+   its previous estimate; the same robust MAP and linearization check as ``survey status``);
 2. the stop rule is checked (:func:`check_stop`): every survey beacon's horizontal 95 % ellipse has a
    semi-major axis at most ``goal_m`` *and* the estimate is trusted (the range model's linearization
    check of the bad-input issue); or the time budget, counted from the survey's first run so that a
@@ -59,8 +60,9 @@ from oceanloc.field.geofence import (
     watchdog_start,
 )
 from oceanloc.field.live_sources import Arrival, SourcePump
-from oceanloc.field.survey_journal import SurveyEstimates, Waypoint, next_waypoint, survey_estimates
-from oceanloc.io.journal import Journal, JournalRecords
+from oceanloc.field.survey_journal import SurveyEstimates, Waypoint
+from oceanloc.field.survey_state import SurveyState
+from oceanloc.io.journal import Journal
 from oceanloc.io.mavlink_vehicle import CommandResult, LinkStatus, MavlinkVehicle
 from oceanloc.io.nmea import GpsFix, Heading
 from oceanloc.io.usbl import RangeRecord
@@ -226,24 +228,29 @@ def check_stop(
 
 
 class EpochEstimator:
-    """The current estimates from a journal, re-read at each epoch (the records are the journal's)."""
+    """The current estimates and plan, kept up to date in memory as records are journaled
+    (:class:`~oceanloc.field.survey_state.SurveyState`: started from the journal, so a resumed run
+    continues from every committed record; work per epoch bounded by what the estimate needs)."""
 
     def __init__(self, journal: Journal, settings: JournalSettings) -> None:
-        self.journal = journal
+        self.state = SurveyState.from_journal(journal)
         self.settings = settings
-        self.records: JournalRecords | None = None
+
+    def add_fix(self, fix: GpsFix) -> None:
+        self.state.add_fixes(fix.t_unix_s, fix.lat_deg, fix.lon_deg, fix.h_m)
+
+    def add_heading(self, fix_t_unix_s: float, heading_deg: float) -> None:
+        self.state.add_headings(fix_t_unix_s, heading_deg)
+
+    def add_range(self, t_unix_s: float, beacon: int, range_m: float) -> None:
+        self.state.add_ranges(t_unix_s, beacon, range_m)
 
     def estimate(self) -> SurveyEstimates | None:
-        self.records = self.journal.records()
-        if self.records.n_fixes == 0:
-            return None
-        return survey_estimates(self.records, self.settings)
+        return self.state.estimates() if self.state.n_fixes else None
 
     def plan(self, est: SurveyEstimates, seed: int) -> Waypoint:
-        rec = self.records
-        assert rec is not None
-        rng = np.random.default_rng([seed, rec.n_fixes, rec.n_ranges])
-        return next_waypoint(rec, self.settings, estimates=est, rng=rng)
+        rng = np.random.default_rng([seed, self.state.n_fixes, self.state.n_ranges])
+        return self.state.next_waypoint(rng)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -562,14 +569,17 @@ class _Loop:
             return None
         if isinstance(rec, GpsFix):
             try:
-                self.j.add_fix(rec.t_unix_s, rec.lat_deg, rec.lon_deg, rec.h_m)
+                new = self.j.add_fix(rec.t_unix_s, rec.lat_deg, rec.lon_deg, rec.h_m)
             except DataError as exc:
                 self.notice("source", f"position: {exc}")
                 return None
+            if new:
+                self.estimator.add_fix(rec)
             self.last_fix = rec
             self.heard.fix_t, self.heard.seq = rec.t_unix_s, 0
         elif isinstance(rec, Heading) and self.heard.fix_t is not None:
-            self.j.add_heading(self.heard.fix_t, self.heard.seq, rec.heading_deg % 360.0)
+            if self.j.add_heading(self.heard.fix_t, self.heard.seq, rec.heading_deg % 360.0):
+                self.estimator.add_heading(self.heard.fix_t, rec.heading_deg % 360.0)
             self.heard.seq += 1
         elif isinstance(rec, RangeRecord):
             if not rec.ok or rec.range_m is None:
@@ -581,12 +591,14 @@ class _Loop:
                 )
                 return None
             try:
-                self.j.add_usbl_range(
+                new = self.j.add_usbl_range(
                     rec.t_unix_s, rec.beacon, rec.range_m, rec.azimuth_deg, rec.elevation_deg
                 )
             except DataError as exc:
                 self.notice("source", f"ranges: {exc}")
                 return None
+            if new:
+                self.estimator.add_range(rec.t_unix_s, rec.beacon, rec.range_m)
             return item
         return None
 
