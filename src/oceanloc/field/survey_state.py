@@ -9,18 +9,22 @@ what the estimate needs:
   :func:`~oceanloc.io.usbl.align_ranges` does, to the bit) once the fix after it has arrived. A fix that
   arrives out of time order re-aligns the ranges it brackets, and their beacon is then fitted afresh;
 * only a beacon that received aligned ranges is re-estimated, warm-started from its previous estimate
-  (once it has :data:`FRESH_BELOW` ranges; before, afresh as the batch does):
-  the outlier rule (:func:`~oceanloc.estimation.range_logs.robust_white_fit`) keeps the exclusions made
-  so far and tests the new ranges (ranges excluded earlier whose residual is now below the threshold are
-  given back first, so the mask is the one-shot rule's fixed point), then one generalized least-squares
-  solve with the Gauss-Markov GPS error (:func:`~oceanloc.estimation.range_logs.correlated_fit`, O(n),
-  its covariance linearized at the previous estimate), and the linearization check of its ellipse.
+  (once it has :data:`FRESH_BELOW` ranges; before, afresh as the batch does): the outlier rule
+  (:func:`~oceanloc.estimation.range_logs.robust_white_fit`) keeps the exclusions made so far and tests
+  the new ranges (ranges excluded earlier whose residual is now within the threshold are given back and
+  the rule re-run, so the mask is the one-shot rule's fixed point); then the two generalized
+  least-squares passes with the Gauss-Markov GPS error of the batch estimate
+  (:func:`~oceanloc.estimation.range_logs.correlated_fit`, O(n): the first linearized at this epoch's
+  white estimate, the second at the first's result, as in the batch), each by Newton steps from the
+  previous epoch's result instead of a solve from afar; and the linearization check of its ellipse.
 
-Readings (each a difference from the batch estimate far below a millimetre, tested on simulated logs):
-the GLS covariance is built at the previous epoch's estimate instead of the white estimate of the same
-epoch (one pass instead of two); a beacon that got no new range keeps its estimate although the prior's
-surface height (the median antenna height over all ranges) moved; the outlier mask is carried over
-(equal to the batch rule's on the test logs, where no residual sits on the threshold).
+Readings (each a difference from the batch estimate far below a millimetre; tested on simulated logs
+against :func:`~oceanloc.field.survey_journal.survey_estimates` of the records held, every 400 s of an
+hour: positions within 1 mm, measured about 1e-6 m, the same outliers range for range): a beacon that
+got no new range keeps its estimate although the prior's surface height (the median antenna height
+over all ranges) moved by a millimetre; the outlier mask is carried over instead of re-running the rule
+from all ranges (the same where no residual sits on the threshold); the Newton steps stop within the
+solver's tolerance of the batch solve's point.
 
 Work per epoch: O(n_b) for the re-estimated beacon ``b`` (a few vectorized passes over its ranges),
 nothing for the others; no Python loop over records.
