@@ -28,7 +28,6 @@ from oceanloc.field.live_survey import Epoch, LiveOptions, Notice, StopRule, run
 from oceanloc.io.journal import Journal
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
 from oceanloc.io.records import to_jsonable
-from oceanloc.report.html.live import serve_journal
 from oceanloc.report.tables import live as live_tables
 
 
@@ -113,7 +112,11 @@ def run(
     stop = threading.Event()
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stop.set())
-    page = None if serve is None else serve_journal(journal, serve)
+    page = None
+    if serve is not None:
+        from oceanloc.report.html.live import serve_journal  # (scipy and plotly: only when serving)
+
+        page = serve_journal(journal, serve)
     if page is not None:
         err_console.print(f"live page of {escape(str(journal))}: {page.url}", highlight=False)
     try:

@@ -191,7 +191,9 @@ def test_events_table_plan_and_link_are_shown(journal):
         "bearing_deg": 90.0,
     }
     with sqlite3.connect(journal) as db:
-        db.execute("CREATE TABLE events (seq INTEGER PRIMARY KEY, t REAL, kind TEXT, body TEXT)")
+        db.execute(
+            "CREATE TABLE IF NOT EXISTS events (seq INTEGER PRIMARY KEY, t REAL, kind TEXT, body TEXT)"
+        )
         rows = [
             (1, f[-1, 0], "link", json.dumps({"state": "down"})),
             (2, f[-1, 0], "plan", json.dumps(plan)),

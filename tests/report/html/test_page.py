@@ -160,6 +160,7 @@ def gnssa_with_pings(sources) -> dict:
     """The session's GNSS-A record with per-ping residuals added by hand to its first survey: two
     transponders, 40 pings, three excluded for two reasons."""
     rec = json.loads(sources["gnssa"].read_text())
+    rec.pop("pings", None)  # the record's own (every survey's pings), replaced by these
     t = np.arange(40.0) * 15.0
     residual = 0.02 * np.sin(t / 50.0)
     excluded = np.zeros(40, dtype=bool)
@@ -199,8 +200,14 @@ def test_gnssa_pings_draw_residuals_used_and_excluded_with_reasons(sources):
     assert "Residuals per ping" in page and "elevation below 20 deg" in page
 
 
-def test_gnssa_without_pings_has_no_ping_panel_and_says_so(reports):
-    rep = reports["gnssa"]
+def test_gnssa_without_pings_has_no_ping_panel_and_says_so(reports, sources):
+    from oceanloc.report.html.records import gnssa_report
+
+    # `localize gnssa --json` records carry every ping's residual: the panel is drawn
+    assert any(s.title.startswith("Residuals per ping") for s in reports["gnssa"].series)
+    rec = json.loads(sources["gnssa"].read_text())
+    rec.pop("pings")
+    rep = gnssa_report(rec)
     assert not any(s.title.startswith("Residuals per ping") for s in rep.series)
     assert "not per-ping residuals" in " ".join(rep.notes)
 

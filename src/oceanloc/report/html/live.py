@@ -124,6 +124,7 @@ class JournalTail:
         self.latest_event: dict[str, dict] = {}
         self.n_events = 0
         self.has_events = False
+        self._events_table = False
         self.meta = self._read(lambda db: dict(db.execute("SELECT key, value FROM meta").fetchall()))
         if self.meta.get(FORMAT_KEY) != JOURNAL_FORMAT:
             raise DataError(
@@ -166,17 +167,19 @@ class JournalTail:
             r = self._new_rows(db, "ranges", "t, beacon, range_m", range_problem)
             h = self._new_rows(db, "headings", "t, seq, heading_deg", heading_problem)
             events: list = []
-            if not self.has_events:
-                self.has_events = bool(
+            if not self._events_table:
+                self._events_table = bool(
                     db.execute(
                         "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'events'"
                     ).fetchall()
                 )
-            if self.has_events:
+            if self._events_table:
                 events = db.execute(
                     "SELECT seq, t, kind, body FROM events WHERE seq > ? ORDER BY seq",
                     (self._rowid["events"],),
                 ).fetchall()
+                # a journal written by `survey run` has events (its start first); others have none
+                self.has_events = self.has_events or bool(events)
             return f, r, h, events
 
         f, r, h, events = self._read(work)
