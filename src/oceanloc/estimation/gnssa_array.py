@@ -813,7 +813,7 @@ class _Linearization:
         per-ping products of the few knot entries, summed into their columns by ``np.bincount`` (each
         ping's rows touch at most ``2 S`` knot columns, so this is linear in the pings instead of in
         pings times knots)."""
-        n, width, k0 = self.dense.shape
+        k0 = self.dense.shape[2]
         kk = self.n_knots
         d = k0 + kk
         normal = np.zeros((n_groups, d, d))
