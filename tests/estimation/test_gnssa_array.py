@@ -16,7 +16,9 @@ from oceanloc.estimation.gnssa_array import (
     GnssaArrayOptions,
     _refresh_bending,
     _setup,
+    _whitening,
     gnatss_like_options,
+    hat_pairs,
     localize_gnssa_array,
 )
 from oceanloc.models.sound_profile import SoundSpeedProfile
@@ -75,6 +77,58 @@ def test_model_jacobian_matches_central_differences(solution, model):
     err = np.max(np.abs(jac - fd), axis=0) / scale
     assert np.all(err < tol), err
     assert problem.lever and jac.shape == (survey.n_replies, x.size)
+
+
+@pytest.mark.parametrize("solution", ["independent", "common_shift"])
+def test_structured_normal_equations_equal_the_dense_jacobian_products(solution):
+    """The solver's ``J^T J`` and ``J^T r``, formed blockwise from the hat basis's two knots per reply,
+    equal the dense whitened Jacobian's products to rounding (1e-12 of the largest entry), with partial
+    replies, a lever arm in the state, a gradient, 1 to 4 knots per ping's replies and masked replies."""
+    rng = np.random.default_rng(5)
+    survey, truth = simulate_gnssa_array(
+        rng, positions_enu_m=TRIANGLE, n_pings=150, lever_arm_body_m=(0.4, -0.3, 1.8), reply_probability=0.7
+    )
+    survey = dataclasses.replace(survey, lever_arm_cov_m2=0.05**2 * np.eye(3))
+    opts = GnssaArrayOptions(solution=solution, knot_spacing_s=60.0, min_pings_per_knot=1, prescreen=False)
+    setup = _setup(survey, opts, truth.profile, ArrayGeometry(positions_enu_m=TRIANGLE + 0.3))
+    problem = setup.problem
+    x = setup.prior.mean[0].copy()
+    x[problem.col_gradient : problem.col_gradient + 2] = (4e-4, -7e-4)
+    x[problem.first_knot :] += np.linspace(-1.0, 1.0, x.size - problem.first_knot)
+    problem.mask = rng.random(survey.n_replies) > 0.1
+    problem.whiten, _ = _whitening(problem, x, np.full(survey.n_replies, 0.01))
+    problem.invalidate()
+    rows = np.zeros(1, dtype=np.int64)
+    resid, jac = problem.evaluate(x[None], rows)
+    ne = problem.normal_equations(x[None], rows)
+    dense_normal = jac[0].T @ jac[0]
+    assert problem.n_knots > 10 and np.all(np.abs(problem.residuals(x[None], rows) - resid) == 0.0)
+    assert np.max(np.abs(ne.normal[0] - dense_normal)) < 1e-12 * np.max(np.abs(dense_normal))
+    grad = jac[0].T @ resid[0]
+    assert np.max(np.abs(ne.gradient[0] - grad)) < 1e-12 * np.max(np.abs(grad))
+    assert np.all(ne.normal[0] == ne.normal[0].T) and not ne.blind.any()
+    # the knot block is banded: each reply touches two neighbouring knots
+    k0 = problem.first_knot
+    band = np.abs(np.subtract.outer(np.arange(problem.n_knots), np.arange(problem.n_knots))) > 1
+    assert np.all(ne.normal[0, k0:, k0:][band] == 0.0)
+
+
+def test_hat_pairs_read_the_two_neighbouring_knots_of_each_time():
+    from oceanloc.estimation.gnssa import hat_basis
+
+    knots = np.array([0.0, 10.0, 30.0, 60.0])
+    t = np.array([-5.0, 0.0, 4.0, 10.0, 29.0, 60.0, 75.0])
+    basis = hat_basis(t, knots)
+    first, weight = hat_pairs(basis)
+    assert first.tolist() == [0, 0, 0, 1, 1, 2, 2]
+    rebuilt = np.zeros_like(basis)
+    rebuilt[np.arange(t.size), first] += weight[:, 0]
+    rebuilt[np.arange(t.size), first + 1] += weight[:, 1]
+    assert np.array_equal(rebuilt, basis)
+    one_first, one_weight = hat_pairs(hat_basis(t, knots[:1]))
+    assert np.all(one_first == 0) and np.all(one_weight == [1.0, 0.0])
+    with pytest.raises(ValueError, match="not a hat basis"):
+        hat_pairs(np.ones((2, 3)))
 
 
 def test_noise_free_survey_is_recovered_to_a_tenth_of_a_millimetre_through_the_ray_traced_profile():

@@ -47,6 +47,23 @@ def test_both_methods_recover_the_example(example):
     assert rec["pings"]["reason"].count("") == 600 - rec["replies_excluded"]
 
 
+def test_the_record_epoch_is_the_surveys_utc_time(example):
+    """GNATSS's times are J2000 seconds (2000-01-01 12:00:00): the oceanloc record's ``epoch_utc`` is the
+    mean interrogation time of the used pings as UTC, inside the survey's span (not 20 years off, as
+    with the La Jolla files' 2020 time base)."""
+    import datetime as dt
+
+    folder, _ = example
+    data = load_gnatss_input(folder / "config.yaml")
+    details = localize_gnatss_input(data, method="oceanloc", solution="common_shift").to_record()["details"]
+    j2000 = dt.datetime(2000, 1, 1, 12, tzinfo=dt.UTC)
+    epoch = dt.datetime.fromisoformat(details["epoch_utc"])
+    assert abs((epoch - (j2000 + dt.timedelta(seconds=details["epoch_s"]))).total_seconds()) <= 0.5
+    t = data.pings.t_transmit_s
+    first, last = (j2000 + dt.timedelta(seconds=float(v)) for v in (t.min(), t.max()))
+    assert first <= epoch <= last
+
+
 def test_input_combinations_are_checked(example):
     folder, _ = example
     with pytest.raises(ConfigError, match="--antenna and --attitude go together"):

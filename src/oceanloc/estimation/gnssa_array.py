@@ -72,7 +72,7 @@ from oceanloc.estimation.gnssa import (
     hat_basis,
     robust_first_fit,
 )
-from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, solve_map
+from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, NormalEquations, solve_map
 from oceanloc.geo.enu import enu_to_geodetic
 from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S
 from oceanloc.io.gnssa_array import GnssaArraySurvey
@@ -514,15 +514,24 @@ class _Acoustics:
 
 @dataclass(slots=True)
 class ArrayProblem:
-    """The whitened least-squares model of one array survey (a :class:`WhitenedModel` of batch 1).
+    """The whitened least-squares model of one array survey (a :class:`NormalModel` of batch 1).
 
     State layout (see :attr:`layout`): positions (``3J``) or the shift (3), gradient (2), lever arm (3),
-    knots (K).
+    knots (K). The first :attr:`first_knot` columns of the Jacobian are dense (every reply touches its
+    transponder's position or the shift, the gradient and the lever arm); the knot columns are not: the
+    hat basis puts each reply on two neighbouring knots, so a reply's knot row is two numbers at the
+    columns ``knot_index, knot_index + 1``. The solver is therefore given the normal equations formed
+    from that structure (:meth:`normal_equations`: a dense block by BLAS, the knot block and the cross
+    terms summed by ``np.bincount`` over the knot indices) instead of the dense ``(n S, d)`` Jacobian,
+    whose ``J^T J`` with ~170 knot columns cost most of a solve; :meth:`evaluate` still gives the dense
+    whitened Jacobian, the reference the structured form is tested against.
     """
 
     survey: GnssaArraySurvey
     twtt_s: FloatArray  # (m,) turn-around removed
-    basis: FloatArray  # (m, K)
+    knot_index: IntArray  # (m,) first of the two knots of each reply's hat pair
+    knot_weight: FloatArray  # (m, 2) hat-basis weights of knots knot_index, knot_index + 1
+    n_knots: int
     geometry: FloatArray | None  # (J, 3) for the common shift
     acoustics: _Acoustics
     n_pos: int
@@ -534,8 +543,9 @@ class ArrayProblem:
     _cache: dict = field(default_factory=dict)
 
     def invalidate(self) -> None:
-        """Forget the cached evaluation (after the mask, the whitening or the bending changed)."""
-        self._cache.pop("key", None)
+        """Forget the cached evaluations (after the mask, the whitening or the bending changed)."""
+        for key in ("key", "model_key", "lin_key"):
+            self._cache.pop(key, None)
 
     def fixed(self, key: str) -> FloatArray:
         """Arrays that do not change during the solve, computed once (rotations per reply, one-hot)."""
@@ -551,6 +561,10 @@ class ArrayProblem:
                 self._cache[key] = self.slots >= 0
             elif key == "slot_index":
                 self._cache[key] = np.where(self.slots >= 0, self.slots, 0)
+            elif key == "knot_cols":
+                # (n, 2 S): the knot columns of each ping's slots (padding slots carry zero values)
+                pair = self.knot_index[:, None] + np.array([0, min(1, self.n_knots - 1)])
+                self._cache[key] = pair[self.fixed("slot_index")].reshape(self.slots.shape[0], -1)
         return self._cache[key]
 
     @property
@@ -579,16 +593,38 @@ class ArrayProblem:
         return x[self.col_lever : self.col_lever + 3] if self.lever else self.survey.lever_arm_body_m
 
     def speed(self, x: FloatArray) -> FloatArray:
-        if self.basis.shape[1] == 0:
+        """The sound-speed scale ``c(t)`` of every reply, m/s: the hat basis on its two knots."""
+        if self.n_knots == 0:
             return np.full(self.twtt_s.shape, self.acoustics.c_ref)
-        return self.basis @ x[self.first_knot :]
+        knots = x[self.first_knot :]
+        if self.n_knots == 1:
+            return self.knot_weight[:, 0] * knots[0]
+        k = self.knot_index
+        return self.knot_weight[:, 0] * knots[k] + self.knot_weight[:, 1] * knots[k + 1]
 
     def model(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Modelled TWTT ``(m,)`` (turn-around removed) and its Jacobian ``(m, d)``."""
+        """Modelled TWTT ``(m,)`` (turn-around removed) and its dense Jacobian ``(m, d)`` (the reference
+        form; the solver uses :meth:`model_parts`)."""
+        model, dense, dspeed = self.model_parts(x)
+        jac = np.zeros((model.size, x.size))
+        jac[:, : self.first_knot] = dense
+        if self.n_knots:
+            rows = np.arange(model.size)
+            k0 = self.first_knot
+            jac[rows, k0 + self.knot_index] += dspeed * self.knot_weight[:, 0]
+            if self.n_knots > 1:
+                jac[rows, k0 + self.knot_index + 1] += dspeed * self.knot_weight[:, 1]
+        return model, jac
+
+    def model_parts(self, x: FloatArray, jacobian: bool = True) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Modelled TWTT ``(m,)`` (turn-around removed) and, when ``jacobian``, its derivatives: by the
+        dense columns ``(m, first_knot)`` and by the speed scale of the reply ``(m,)`` (times the hat
+        weights, the knot columns). Without ``jacobian`` the derivatives are empty: the cost of a trial
+        step needs the model only, which is a third of the work."""
         s = self.survey
         ac = self.acoustics
         m = self.twtt_s.size
-        d = x.size
+        k0 = self.first_knot
         j_of = s.reply_transponder
         pos = self.positions(x)[j_of]  # (m, 3)
         a, b = self.legs(x)
@@ -601,57 +637,56 @@ class ArrayProblem:
         ):
             diff = leg - pos
             length = np.sqrt(np.sum(diff * diff, axis=1))
-            unit = diff / np.maximum(length, 1e-9)[:, None]  # d L / d leg = unit = - d L / d p
             if ac.model == "straight":
                 h = np.full(m, 1.0 / ac.c_ref)
-                d_p = -unit * h[:, None]
-                d_leg = unit * h[:, None]
             elif ac.model == "harmonic":
                 assert ac.fixed_slowness is not None
                 h = ac.fixed_slowness[j_of]
-                d_p = -unit * h[:, None]
-                d_leg = unit * h[:, None]
             else:
                 assert ac.profile is not None
                 za = ac.surface_m - leg[:, 2]
                 zb = ac.surface_m - pos[:, 2]
                 h = ac.profile.harmonic_slowness_spm(za, zb)
+            time += length * h + delta
+            if not jacobian:
+                continue
+            unit = diff / np.maximum(length, 1e-9)[:, None]  # d L / d leg = unit = - d L / d p
+            d_p = -unit * h[:, None]
+            d_leg = unit * h[:, None]
+            if ac.model == "ray":
                 dz = np.where(np.abs(zb - za) < 1e-6, 1e-6, zb - za)
                 dh_dzb = (1.0 / ac.profile.speed_at_mps(np.nextafter(zb, -np.inf)) - h) / dz
                 dh_dza = (h - 1.0 / ac.profile.speed_at_mps(za)) / dz
-                d_p = -unit * h[:, None]
                 d_p[:, 2] -= length * dh_dzb  # z_b = surface - U_p
-                d_leg = unit * h[:, None]
                 d_leg[:, 2] -= length * dh_dza
-            time += length * h + delta
             jac_p += d_p
             if self.lever:
                 jac_l += np.matmul(d_leg[:, None, :], rot)[:, 0, :]
         path = ac.c_ref * time
-        jac_path = np.zeros((m, d))
+        jac_path = np.zeros((m, k0)) if jacobian else np.zeros((m, 0))
         jac_p *= ac.c_ref
-        if self.lever:
+        if self.lever and jacobian:
             jac_path[:, self.col_lever : self.col_lever + 3] = ac.c_ref * jac_l
         if self.gradient:
             g = 1e-3 * x[self.col_gradient : self.col_gradient + 2]
             factor = gradient_path_m2(pos, a) + gradient_path_m2(pos, b)
             path = path + factor @ g
-            jac_path[:, self.col_gradient : self.col_gradient + 2] = 1e-3 * factor
-            for leg, rot in ((a, self.fixed("tx_rotation")), (b, s.receive_rotation)):
-                gj = gradient_path_jacobian(pos, leg)
-                d_grad = g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]  # d/d transponder = -d/d leg
-                jac_p += d_grad
-                if self.lever:
-                    cl = self.col_lever
-                    jac_path[:, cl : cl + 3] -= np.matmul(d_grad[:, None, :], rot)[:, 0, :]
-        self._scatter_position(jac_path, jac_p)
+            if jacobian:
+                jac_path[:, self.col_gradient : self.col_gradient + 2] = 1e-3 * factor
+                for leg, rot in ((a, self.fixed("tx_rotation")), (b, s.receive_rotation)):
+                    gj = gradient_path_jacobian(pos, leg)
+                    d_grad = g[0] * gj[:, 0, :] + g[1] * gj[:, 1, :]  # d/d transponder = -d/d leg
+                    jac_p += d_grad
+                    if self.lever:
+                        cl = self.col_lever
+                        jac_path[:, cl : cl + 3] -= np.matmul(d_grad[:, None, :], rot)[:, 0, :]
         c = self.speed(x)
         model = path / c
-        jac = jac_path
-        jac /= c[:, None]
-        if self.basis.shape[1]:
-            jac[:, self.first_knot :] = (-path / (c * c))[:, None] * self.basis
-        return model, jac
+        if not jacobian:
+            return model, jac_path, np.zeros(0)
+        self._scatter_position(jac_path, jac_p)
+        jac_path /= c[:, None]
+        return model, jac_path, -path / (c * c)
 
     def _scatter_position(self, jac: FloatArray, d_p: FloatArray) -> None:
         """Put the per-reply position derivative ``(m, 3)`` in the state columns of its transponder."""
@@ -671,29 +706,142 @@ class ArrayProblem:
         lever = self.lever_arm(x)
         return s.transmit_enu_m(lever)[s.reply_ping], s.receive_enu_m(lever)
 
+    def model_value(self, x: FloatArray) -> FloatArray:
+        """The modelled TWTT ``(m,)`` at ``x``, the last one cached (the solver's accepted trial is the
+        next linearization point and the outer loop's residual point)."""
+        key = x.tobytes()
+        if self._cache.get("model_key") != key:
+            self._cache.update(model_key=key, model=self.model_parts(x, jacobian=False)[0])
+        return self._cache["model"]
+
     def residual_m(self, x: FloatArray) -> FloatArray:
         """``c_ref (TWTT - tau - model)`` of every reply, metres."""
-        return self.acoustics.c_ref * (self.twtt_s - self.model(x)[0])
+        return self.acoustics.c_ref * (self.twtt_s - self.model_value(x))
 
-    def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
-        """Whitened residuals ``(1, n S)`` and Jacobian ``(1, n S, d)``; the last evaluation is cached
-        (the solver asks for the cost of a trial and then, once accepted, for its Jacobian)."""
-        xs = x[0]
-        key = xs.tobytes()
-        if self._cache.get("key") == key:
-            return self._cache["rw"], self._cache["jw"]
-        model, jac = self.model(xs)
+    def _whitened_residual(self, model: FloatArray) -> FloatArray:
+        """Whitened residuals ``(n, S)`` of the used replies (zero rows for the others and padding)."""
         c0 = self.acoustics.c_ref
         r = np.where(self.mask, c0 * (self.twtt_s - model), 0.0)
-        jac *= np.where(self.mask, c0, 0.0)[:, None]
+        r_pad = np.where(self.fixed("valid"), r[self.fixed("slot_index")], 0.0)
+        return np.matmul(self.whiten, r_pad[..., None])[..., 0]
+
+    def residuals(self, x: FloatArray, rows: IntArray) -> FloatArray:
+        """Whitened residuals ``(1, n S)`` without the Jacobian (the cost of a trial step)."""
+        return self._whitened_residual(self.model_value(x[0])).reshape(1, -1)
+
+    def linearize(self, x: FloatArray) -> _Linearization:
+        """The whitened residuals and Jacobian at ``x (d,)`` in structured form (cached: the solver asks
+        for the normal equations at the accepted point, then for the covariance at the same one)."""
+        key = x.tobytes()
+        if self._cache.get("lin_key") == key:
+            return self._cache["lin"]
+        model, dense, dspeed = self.model_parts(x)
+        self._cache.update(model_key=key, model=model)
+        c0 = self.acoustics.c_ref
+        weight = np.where(self.mask, c0, 0.0)
+        dense *= weight[:, None]
         valid, idx = self.fixed("valid"), self.fixed("slot_index")
-        r_pad = np.where(valid, r[idx], 0.0)
-        j_pad = jac[idx]
-        j_pad *= valid[..., None]
-        rw = np.matmul(self.whiten, r_pad[..., None])[..., 0].reshape(1, -1)
-        jw = np.matmul(self.whiten, j_pad).reshape(1, -1, xs.size)
-        self._cache.update(key=key, rw=rw, jw=jw)
-        return rw, jw
+        d_pad = dense[idx]
+        d_pad *= valid[..., None]
+        n, width = self.slots.shape
+        if self.n_knots:
+            k_raw = (dspeed[:, None] * self.knot_weight) * weight[:, None]  # (m, 2)
+            k_pad = k_raw[idx] * valid[..., None]  # (n, S, 2)
+            # whitened row s of ping n: sum over slots t of W[s, t] (slot t's two knot values)
+            k_w = (self.whiten[..., None] * k_pad[:, None, :, :]).reshape(n, width, 2 * width)
+        else:
+            k_w = np.zeros((n, width, 0))
+        lin = _Linearization(
+            residual=self._whitened_residual(model),
+            dense=np.matmul(self.whiten, d_pad),
+            knot_value=k_w,
+            knot_col=self.fixed("knot_cols") if self.n_knots else np.zeros((n, 0), dtype=np.int64),
+            n_knots=self.n_knots,
+        )
+        self._cache.update(lin_key=key, lin=lin)
+        return lin
+
+    def normal_equations(self, x: FloatArray, rows: IntArray) -> NormalEquations:
+        """``J^T J``, ``J^T r`` and the blind rows at ``x (1, d)`` from the structured Jacobian."""
+        lin = self.linearize(x[0])
+        normal, grad = lin.normal(np.zeros(lin.residual.shape[0], dtype=np.int64), 1)
+        return NormalEquations(
+            residual=lin.residual.reshape(1, -1), gradient=grad, normal=normal, blind=lin.blind()[None]
+        )
+
+    def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
+        """Whitened residuals ``(1, n S)`` and dense Jacobian ``(1, n S, d)`` (the reference form of
+        :meth:`normal_equations`; the solver does not use it)."""
+        lin = self.linearize(x[0])
+        return lin.residual.reshape(1, -1), lin.dense_jacobian()[None]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _Linearization:
+    """Whitened residuals and Jacobian of an :class:`ArrayProblem` at one state, per ping ``n`` and slot
+    ``s``: ``J[(n, s)] = [dense[n, s], knots]`` with the knot part ``knot_value[n, s, a]`` at the columns
+    ``first_knot + knot_col[n, a]`` (``a`` over the ping's slots times their two hat knots; repeated
+    columns add up)."""
+
+    residual: FloatArray  # (n, S)
+    dense: FloatArray  # (n, S, k0)
+    knot_value: FloatArray  # (n, S, 2 S)
+    knot_col: IntArray  # (n, 2 S)
+    n_knots: int
+
+    def dense_jacobian(self) -> FloatArray:
+        """The whitened Jacobian as a dense ``(n S, k0 + K)`` matrix."""
+        n, width, k0 = self.dense.shape
+        jac = np.zeros((n, width, k0 + self.n_knots))
+        jac[..., :k0] = self.dense
+        cols = np.broadcast_to(k0 + self.knot_col[:, None, :], self.knot_value.shape)
+        ping = np.broadcast_to(np.arange(n)[:, None, None], cols.shape)
+        slot = np.broadcast_to(np.arange(width)[None, :, None], cols.shape)
+        np.add.at(jac, (ping, slot, cols), self.knot_value)
+        return jac.reshape(n * width, -1)
+
+    def blind(self) -> BoolArray:
+        """Rows ``(n S,)`` with a zero Jacobian but a nonzero residual."""
+        zero = np.all(self.dense == 0.0, axis=-1) & np.all(self.knot_value == 0.0, axis=-1)
+        return (zero & (self.residual != 0.0)).reshape(-1)
+
+    def normal(self, group: IntArray, n_groups: int) -> tuple[FloatArray, FloatArray]:
+        """``J^T J`` ``(G, d, d)`` and ``J^T r`` ``(G, d)`` of the rows of each group of pings (``group
+        (n,)`` in ``0 .. n_groups - 1``; one group: the whole survey; the jackknife's time blocks).
+
+        Blockwise: the dense columns by BLAS; the knot-knot block and the dense-knot cross terms are the
+        per-ping products of the few knot entries, summed into their columns by ``np.bincount`` (each
+        ping's rows touch at most ``2 S`` knot columns, so this is linear in the pings instead of in
+        pings times knots)."""
+        k0 = self.dense.shape[2]
+        kk = self.n_knots
+        d = k0 + kk
+        normal = np.zeros((n_groups, d, d))
+        grad = np.zeros((n_groups, d))
+        for g in range(n_groups):
+            sel = slice(None) if n_groups == 1 else group == g
+            dg = self.dense[sel].reshape(-1, k0)
+            normal[g, :k0, :k0] = dg.T @ dg
+            grad[g, :k0] = dg.T @ self.residual[sel].reshape(-1)
+        if kk == 0:
+            return normal, grad
+        v, cols = self.knot_value, self.knot_col
+        base = (group * kk)[:, None] + cols  # (n, 2S): group and knot column
+        size = n_groups * kk
+        cross = np.matmul(np.swapaxes(v, 1, 2), self.dense)  # (n, 2S, k0)
+        flat = (base[..., None] * k0 + np.arange(k0)).reshape(-1)
+        kd = np.bincount(flat, weights=cross.reshape(-1), minlength=size * k0).reshape(n_groups, kk, k0)
+        prod = np.matmul(np.swapaxes(v, 1, 2), v)  # (n, 2S, 2S)
+        pair = ((base[:, :, None] * kk) + cols[:, None, :]).reshape(-1)
+        block = np.bincount(pair, weights=prod.reshape(-1), minlength=size * kk).reshape(n_groups, kk, kk)
+        normal[:, k0:, :k0] = kd
+        normal[:, :k0, k0:] = np.swapaxes(kd, 1, 2)
+        normal[:, k0:, k0:] = 0.5 * (block + np.swapaxes(block, 1, 2))
+        g_k = np.einsum("nsa,ns->na", v, self.residual)
+        grad[:, k0:] = np.bincount(base.reshape(-1), weights=g_k.reshape(-1), minlength=size).reshape(
+            n_groups, kk
+        )
+        return normal, grad
 
 
 def _slots(ping: IntArray, n: int) -> IntArray:
@@ -1060,14 +1208,16 @@ def _setup(
     # knots on the replies' mid-times
     t_mid = 0.5 * (s.t_transmit_s[s.reply_ping] + s.t_receive_s)
     knots = _knots(t_mid, opts, s.n_pings)
-    basis = hat_basis(t_mid, knots)
+    knot_index, knot_weight = hat_pairs(hat_basis(t_mid, knots))
     lever_in_state = opts.estimate_lever_arm or bool(np.any(s.lever_arm_cov_m2 != 0.0))
     shift = opts.solution == "common_shift"
     n_pos = 3 if shift else 3 * n_t
     problem = ArrayProblem(
         survey=s,
         twtt_s=twtt,
-        basis=basis,
+        knot_index=knot_index,
+        knot_weight=knot_weight,
+        n_knots=knots.size,
         geometry=geometry.positions_enu_m if shift and geometry is not None else None,
         acoustics=acoustics,
         n_pos=n_pos,
@@ -1125,29 +1275,44 @@ def _knots(t_s: FloatArray, opts: GnssaArrayOptions, n_pings: int) -> FloatArray
     return np.linspace(t0, t1, n_seg + 1)
 
 
+def hat_pairs(basis: FloatArray) -> tuple[IntArray, FloatArray]:
+    """The two nonzero columns of each row of a hat basis ``(m, K)``: the first index ``(m,)`` and the
+    weights ``(m, 2)`` at it and the next column, read from the basis itself (so ``speed`` equals the dense
+    product). A hat basis row is nonzero on at most two neighbouring knots; with one knot the second
+    weight is 0 (and its column repeats the first)."""
+    m, kk = basis.shape
+    if kk == 0:
+        return np.zeros(m, dtype=np.int64), np.zeros((m, 2))
+    if kk == 1:
+        return np.zeros(m, dtype=np.int64), np.stack([basis[:, 0], np.zeros(m)], axis=1)
+    first = np.clip(np.argmax(basis != 0.0, axis=1), 0, kk - 2)
+    rows = np.arange(m)
+    weight = np.stack([basis[rows, first], basis[rows, first + 1]], axis=1)
+    if not np.allclose(weight.sum(axis=1), basis.sum(axis=1), rtol=0.0, atol=1e-12):
+        raise ValueError("not a hat basis: a row has nonzeros beyond two neighbouring knots")
+    return first, weight
+
+
 def _linearized_jackknife(
     problem: ArrayProblem, prior: GaussianPrior, x: FloatArray, blocks: int, cols: slice
 ) -> FloatArray | None:
     """Delete-one-block jackknife of the state columns ``cols`` over contiguous time blocks of pings,
-    each block's estimate one Gauss-Newton step from the solution (normal-matrix downdate)."""
+    each block's estimate one Gauss-Newton step from the solution (normal-matrix downdate). The blocks'
+    normal equations come from one structured pass (:meth:`_Linearization.normal`) and the downdated
+    systems are solved in one batched call."""
     s = problem.survey
     used_pings = np.unique(s.reply_ping[problem.mask])
     if blocks < 2 or used_pings.size < 4 * blocks:
         return None
-    rw, jw = problem.evaluate(x[None, :], np.zeros(1, dtype=np.int64))
-    rw, jw = rw[0].reshape(s.n_pings, -1), jw[0].reshape(s.n_pings, problem.slots.shape[1], -1)
+    lin = problem.linearize(x)
     order = used_pings[np.argsort(s.t_transmit_s[used_pings], kind="stable")]
-    block_of = np.full(s.n_pings, -1)
+    block_of = np.full(s.n_pings, blocks)  # pings without a used reply: an extra block, all zero rows
     block_of[order] = np.arange(order.size) * blocks // order.size
+    normal, grad = lin.normal(block_of, blocks + 1)
     info = np.linalg.inv(prior.cov)
-    flat = jw.reshape(-1, x.size)
-    a_full = flat.T @ flat + info
-    reps = []
-    for g in range(blocks):
-        sel = block_of == g
-        jg, rg = jw[sel].reshape(-1, x.size), rw[sel].reshape(-1)
-        reps.append(np.linalg.solve(a_full - jg.T @ jg, -(jg.T @ rg)))
-    dev = np.array(reps)[:, cols]
+    a_full = normal.sum(axis=0) + info
+    reps = np.linalg.solve(a_full[None] - normal[:blocks], -grad[:blocks, :, None])[..., 0]
+    dev = reps[:, cols]
     dev = dev - dev.mean(axis=0)
     return (blocks - 1) / blocks * dev.T @ dev
 

@@ -29,7 +29,10 @@ range whose sensor sits on the estimate, where the range has no direction), the 
 
 The solver is generic over small least-squares models (:class:`WhitenedModel`), batched over any number
 of independent problems (Monte Carlo runs times transponders), so other measurement models (two-way
-travel times, an unknown sound speed) reuse it.
+travel times, an unknown sound speed) reuse it. A model whose Jacobian is sparse (a GNSS-A survey: tens of
+thousands of rows, each touching a few of its hundreds of columns) may also be a :class:`NormalModel`:
+it then forms ``J^T J`` and ``J^T r`` itself from its structure, and gives residuals without a Jacobian
+for the cost of a trial step, so the solver never holds the dense ``(n, d)`` Jacobian.
 """
 
 from __future__ import annotations
@@ -56,6 +59,41 @@ class WhitenedModel(Protocol):
     def batch_size(self) -> int: ...
 
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]: ...
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class NormalEquations:
+    """The Gauss-Newton normal equations of a batch at given states (:meth:`NormalModel.normal_equations`).
+
+    Attributes
+    ----------
+    residual : (b, n) float
+        Whitened residuals ``(z - h(x)) / sigma``.
+    gradient : (b, d) float
+        ``J^T r`` (``J`` the whitened Jacobian ``dh/dx / sigma``).
+    normal : (b, d, d) float
+        ``J^T J``, symmetric.
+    blind : (b, n) bool
+        Measurements whose Jacobian row is zero although their residual is not (see :func:`solve_map`).
+    """
+
+    residual: FloatArray
+    gradient: FloatArray
+    normal: FloatArray
+    blind: BoolArray
+
+
+class NormalModel(WhitenedModel, Protocol):
+    """A :class:`WhitenedModel` that forms its own normal equations (for sparse Jacobians).
+
+    ``residuals(x, rows)`` returns the whitened residuals ``(b, n)`` alone (the cost of a trial step needs
+    no Jacobian); ``normal_equations(x, rows)`` the :class:`NormalEquations` at ``x``. Both must agree with
+    ``evaluate`` (``normal == J^T J``, ``gradient == J^T r`` to rounding), which stays the reference.
+    """
+
+    def residuals(self, x: FloatArray, rows: IntArray) -> FloatArray: ...
+
+    def normal_equations(self, x: FloatArray, rows: IntArray) -> NormalEquations: ...
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -214,7 +252,8 @@ def solve_map(
     Parameters
     ----------
     problem : WhitenedModel
-        ``B`` independent least-squares problems (for example :class:`RangeProblem`).
+        ``B`` independent least-squares problems (for example :class:`RangeProblem`); a
+        :class:`NormalModel` gives its normal equations itself.
     prior : GaussianPrior
         Prior mean ``(B, d)`` and covariance ``(B, d, d)`` or ``(d, d)``.
     options : MapOptions, optional
@@ -253,11 +292,11 @@ def solve_map(
         if active.size == 0:
             break
         xa = x[active]
-        resid, jac = problem.evaluate(xa, active)
+        ne = _normal_equations(problem, xa, active)
         info_a = prior_info[active]
         dev = xa - mean[active]
-        normal = _gram(jac) + info_a
-        grad = np.einsum("bni,bn->bi", jac, resid) - np.einsum("bij,bj->bi", info_a, dev)
+        normal = ne.normal + info_a
+        grad = ne.gradient - np.einsum("bij,bj->bi", info_a, dev)
         lam_a = lam[active]
         damped = normal + lam_a[:, None, None] * (normal * np.eye(dim))
         step = np.linalg.solve(damped, grad[..., None])[..., 0]
@@ -274,13 +313,13 @@ def solve_map(
         converged[active] = done
         active = active[~done]
 
-    resid, jac = problem.evaluate(x, all_rows)
-    information = _gram(jac) + prior_info
-    covariance = np.linalg.inv(information)
-    covariance = 0.5 * (covariance + np.swapaxes(covariance, -1, -2))
     # A measurement that disagrees with the estimate but has no derivative there (a range from a sensor
     # at the estimate) leaves the step at zero without the estimate being a minimum.
-    blind = np.all(jac == 0.0, axis=-1) & (resid != 0.0)
+    ne = _normal_equations(problem, x, all_rows, blind=True)
+    information = ne.normal + prior_info
+    covariance = np.linalg.inv(information)
+    covariance = 0.5 * (covariance + np.swapaxes(covariance, -1, -2))
+    blind = ne.blind
     degenerate = blind.any(axis=-1)
     finite = np.all(np.isfinite(x), axis=-1) & np.isfinite(cost)
     status = np.where(converged, "converged", "max-iterations").astype("<U14")
@@ -321,6 +360,21 @@ def _gram(jac: FloatArray) -> FloatArray:
     return np.einsum("bni,bnj->bij", jac, jac)
 
 
+def _normal_equations(
+    problem: WhitenedModel, x: FloatArray, rows: IntArray, blind: bool = False
+) -> NormalEquations:
+    """The normal equations of ``problem`` at ``x``: its own (:class:`NormalModel`) or from ``evaluate``;
+    ``blind`` rows are found only when asked (for a dense model they cost a pass over the Jacobian)."""
+    own = getattr(problem, "normal_equations", None)
+    if own is not None:
+        return own(x, rows)
+    resid, jac = problem.evaluate(x, rows)
+    mark = np.all(jac == 0.0, axis=-1) & (resid != 0.0) if blind else np.zeros(resid.shape, dtype=bool)
+    return NormalEquations(
+        residual=resid, gradient=np.einsum("bni,bn->bi", jac, resid), normal=_gram(jac), blind=mark
+    )
+
+
 def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:
     """The prior information matrices ``P0^-1``; ConfigError for a prior that is not a valid Gaussian."""
     bad = ~np.all(np.isfinite(mean), axis=-1)
@@ -359,7 +413,8 @@ def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:
 def _cost(
     problem: WhitenedModel, x: FloatArray, rows: IntArray, mean: FloatArray, prior_info: FloatArray
 ) -> FloatArray:
-    resid, _ = problem.evaluate(x, rows)
+    own = getattr(problem, "residuals", None)
+    resid = own(x, rows) if own is not None else problem.evaluate(x, rows)[0]
     dev = x - mean[rows]
     prior_term = np.einsum("bi,bij,bj->b", dev, prior_info[rows], dev)
     return 0.5 * (np.sum(resid * resid, axis=-1) + prior_term)

@@ -32,6 +32,7 @@ from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, ap
 from oceanloc.estimation.gnssa_array import ArrayGeometry, GnssaArrayOptions, localize_gnssa_array
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
 from oceanloc.io.gnatss import (
+    J2000_UNIX_S,
     RESIDUAL_SPEED_MPS,
     AntennaPositions,
     ArrayPings,
@@ -527,6 +528,7 @@ def localize_gnatss_input(
         line=pk.line,
         path=p.path,
         qc=p.qc,
+        time_origin_unix_s=J2000_UNIX_S,  # GNATSS's times are J2000 seconds: the record's epoch_utc
     )
     opts = options or GnssaArrayOptions(solution=solution)
     profile = (
