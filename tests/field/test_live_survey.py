@@ -163,7 +163,8 @@ def test_a_dry_run_on_udp_sources_journals_plans_and_stops_on_its_budget(tmp_pat
     assert plans and all(p.body["site"]["status"] in ("inside", "clipped") for p in plans)
     assert all(p.body["site"]["leg_m"] <= 30.0 + 1e-6 for p in plans)
     assert {c.body["status"] for c in commands} == {None}
-    assert epochs[-1].stop.done and epochs[-1].waypoint is None  # the last epoch stopped the survey
-    line = epoch_line(epochs[-2])
+    # the epoch that planned the 15th site stopped the survey (the stop rule follows the command)
+    assert epochs[-1].stop.done and epochs[-1].stop.status == "sites" and epochs[-1].waypoint is not None
+    line = epoch_line(epochs[-1])
     assert " next " in line and "dry run" in line and "b1 " in line
     assert result_lines(result)[0].startswith("survey ")

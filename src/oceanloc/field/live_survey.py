@@ -2,21 +2,25 @@
 
 ``oceanloc survey run`` drives an autonomous surface vehicle that ranges to seafloor transponders.
 Everything it reads goes into the survey journal (:mod:`oceanloc.io.journal`) as it arrives, one
-transaction per record, before anything is computed from it. Then, for every new range (an *epoch*):
+transaction per record, before anything is computed from it. Then, for every new range (an *epoch*; the
+ranges that came while the previous epoch ran are folded into this one):
 
-1. the beacons are re-estimated (:class:`EpochEstimator`: the journal's records held in memory by
-   :class:`~oceanloc.field.survey_state.SurveyState`, only the beacon that got the range re-fitted from
-   its previous estimate; the same robust MAP and linearization check as ``survey status``);
-2. the stop rule is checked (:func:`check_stop`): every survey beacon's horizontal 95 % ellipse has a
+1. the survey's planner (greedy D-optimal or look-ahead, :func:`~oceanloc.field.survey_journal.
+   next_waypoint`) picks the next site from the vehicle's last fix, on the estimates of every range
+   aligned so far (receding horizon: the site is re-planned at every range, so the vehicle always heads
+   for the most informative point within reach; with drop positions, from the first fix on);
+2. the site is checked against the geofence and the maximum leg (:func:`~oceanloc.field.geofence.
+   check_site`: clipped inside, or refused) and sent to the vehicle as a GUIDED position target (or, with
+   ``command="mission"``, as a mission of the planned sites flown in AUTO);
+3. the beacons are re-estimated (:class:`EpochEstimator`: the journal's records held in memory by
+   :class:`~oceanloc.field.survey_state.SurveyState`, only the beacons that got aligned ranges re-fitted
+   from their previous estimates; the same robust MAP and linearization check as ``survey status``). A
+   range is placed on the track once the fix after it has come, so the re-fit after the command loses
+   nothing the command could have used, and keeps the range-to-command latency free of it;
+4. the stop rule is checked (:func:`check_stop`): every survey beacon's horizontal 95 % ellipse has a
    semi-major axis at most ``goal_m`` *and* the estimate is trusted (the range model's linearization
    check of the bad-input issue); or the time budget, counted from the survey's first run so that a
    resumed survey keeps its budget, or the budget of commanded sites is spent;
-3. the survey's planner (greedy D-optimal or look-ahead, :func:`~oceanloc.field.survey_journal.
-   next_waypoint`) picks the next site from the vehicle's last fix (receding horizon: the site is
-   re-planned at every range, so the vehicle always heads for the most informative point within reach);
-4. the site is checked against the geofence and the maximum leg (:func:`~oceanloc.field.geofence.
-   check_site`: clipped inside, or refused) and sent to the vehicle as a GUIDED position target (or, with
-   ``command="mission"``, as a mission of the planned sites flown in AUTO);
 5. the estimate, the plan and the command are journaled as events, with the latency from the range's
    arrival to the command.
 
@@ -34,6 +38,7 @@ taken.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import queue
 import threading
@@ -60,7 +65,7 @@ from oceanloc.field.geofence import (
     watchdog_start,
 )
 from oceanloc.field.live_sources import Arrival, SourcePump
-from oceanloc.field.survey_journal import SurveyEstimates, Waypoint
+from oceanloc.field.survey_journal import SurveyEstimates, Waypoint, next_waypoint
 from oceanloc.field.survey_state import SurveyState
 from oceanloc.io.journal import Journal
 from oceanloc.io.mavlink_vehicle import CommandResult, LinkStatus, MavlinkVehicle
@@ -235,6 +240,7 @@ class EpochEstimator:
     def __init__(self, journal: Journal, settings: JournalSettings) -> None:
         self.state = SurveyState.from_journal(journal)
         self.settings = settings
+        self.last: SurveyEstimates | None = None
 
     def add_fix(self, fix: GpsFix) -> None:
         self.state.add_fixes(fix.t_unix_s, fix.lat_deg, fix.lon_deg, fix.h_m)
@@ -246,11 +252,20 @@ class EpochEstimator:
         self.state.add_ranges(t_unix_s, beacon, range_m)
 
     def estimate(self) -> SurveyEstimates | None:
-        return self.state.estimates() if self.state.n_fixes else None
+        """Re-fit with every record held (only beacons that got aligned ranges are re-fitted)."""
+        self.last = self.state.estimates() if self.state.n_fixes else None
+        return self.last
+
+    def planning_estimates(self) -> SurveyEstimates | None:
+        """The last estimates with the track up to the latest fix (the plan starts there); None before
+        the first estimate."""
+        if self.last is None:
+            return None
+        return dataclasses.replace(self.last, track_enu_m=self.state.track_enu_m)
 
     def plan(self, est: SurveyEstimates, seed: int) -> Waypoint:
         rng = np.random.default_rng([seed, self.state.n_fixes, self.state.n_ranges])
-        return self.state.next_waypoint(rng)
+        return next_waypoint(self.state.records(), self.settings, estimates=est, rng=rng)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -603,34 +618,40 @@ class _Loop:
         return None
 
     def epoch(self, arrival: Arrival, link: LinkStatus | None) -> LiveSurveyResult | None:
+        """One epoch: the command first, planned on the estimates of every range aligned so far (a range
+        is placed on the track once the fix after it has come, so the one that started the epoch is
+        seldom among them), then the re-fit with the ranges the latest fixes aligned, and the stop rule
+        on it. The range-to-command latency therefore holds no re-fit; the next epoch plans on it."""
         self.epochs += 1
         rec = arrival.record
         assert isinstance(rec, RangeRecord)
         links = {"vehicle": "none" if link is None else (link.mode_name if link.alive else "lost")}
+        wp = site = command = None
+        note = ""
+        planned = self.estimator.planning_estimates()
+        if planned is not None and self.last_fix is not None:
+            try:
+                wp = self.estimator.plan(planned, self.opt.seed)
+            except DataError as exc:
+                note = str(exc)
+            else:
+                site = self.check(wp)
+                command, note = self.command(wp, site, link)
+        latency_ms = (time.monotonic() - arrival.t_mono_s) * 1e3
         try:
             est = self.estimator.estimate()
         except DataError as exc:
             going = StopCheck(done=False, status=None, reason="")
-            self.report(rec, None, None, None, None, arrival, links, going, note=str(exc))
+            self.report(rec, None, wp, site, command, latency_ms, links, going, note=note or str(exc))
             return None
         self.estimates = est
         stop = check_stop(est, self.settings, self.opt.stop, elapsed_s=time.time() - self.t_start,
                           sites=self.sites)  # fmt: skip
-        if stop.done:
-            self.report(rec, est, None, None, None, arrival, links, stop)
-            return self.finish(stop.status or "goal", stop.reason)
-        if est is None or self.last_fix is None:
+        if est is None and not note:
             note = "no GPS fix yet"
-            self.report(rec, est, None, None, None, arrival, links, stop, note=note)
-            return None
-        try:
-            wp = self.estimator.plan(est, self.opt.seed)
-        except DataError as exc:
-            self.report(rec, est, None, None, None, arrival, links, stop, note=str(exc))
-            return None
-        site = self.check(wp)
-        command, note = self.command(wp, site, link)
-        self.report(rec, est, wp, site, command, arrival, links, stop, note=note)
+        self.report(rec, est, wp, site, command, latency_ms, links, stop, note=note)
+        if stop.done:
+            return self.finish(stop.status or "goal", stop.reason)
         return None
 
     def check(self, wp: Waypoint) -> CheckedSite:
@@ -699,8 +720,7 @@ class _Loop:
                     )
         return self.fence
 
-    def report(self, rec, est, wp, site, command, arrival, links, stop, note: str = "") -> None:
-        latency = (time.monotonic() - arrival.t_mono_s) * 1e3
+    def report(self, rec, est, wp, site, command, latency, links, stop, note: str = "") -> None:
         if wp is not None and (command is not None or self.opt.dry_run):
             self.latencies.append(latency)
         now = time.monotonic()

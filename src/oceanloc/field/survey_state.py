@@ -179,6 +179,11 @@ class SurveyState:
         return self._rng.n
 
     @property
+    def track_enu_m(self) -> FloatArray:
+        """Every fix held in the survey's ENU frame, ``(n, 3)`` metres (a view: do not modify)."""
+        return self._enu.view
+
+    @property
     def n_records(self) -> int:
         """Fixes, headings and ranges held."""
         return self._fix.n + self._head.n + self._rng.n
