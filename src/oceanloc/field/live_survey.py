@@ -15,8 +15,10 @@ ranges that came while the previous epoch ran are folded into this one):
 3. the beacons are re-estimated (:class:`EpochEstimator`: the journal's records held in memory by
    :class:`~oceanloc.field.survey_state.SurveyState`, only the beacons that got aligned ranges re-fitted
    from their previous estimates; the same robust MAP and linearization check as ``survey status``). A
-   range is placed on the track once the fix after it has come, so the re-fit after the command loses
-   nothing the command could have used, and keeps the range-to-command latency free of it;
+   range is placed on the track only once the fix after it has come, so the range that started the
+   epoch is seldom in any estimate yet; the plan of step 1 is the previous epoch's re-fit, short of the
+   ranges aligned since (usually one: the previous range). Doing the re-fit after the command keeps it
+   out of the range-to-command latency;
 4. the stop rule is checked (:func:`check_stop`): every survey beacon's horizontal 95 % ellipse has a
    semi-major axis at most ``goal_m`` *and* the estimate is trusted (the range model's linearization
    check of the bad-input issue); or the time budget, counted from the survey's first run so that a
@@ -618,10 +620,9 @@ class _Loop:
         return None
 
     def epoch(self, arrival: Arrival, link: LinkStatus | None) -> LiveSurveyResult | None:
-        """One epoch: the command first, planned on the estimates of every range aligned so far (a range
-        is placed on the track once the fix after it has come, so the one that started the epoch is
-        seldom among them), then the re-fit with the ranges the latest fixes aligned, and the stop rule
-        on it. The range-to-command latency therefore holds no re-fit; the next epoch plans on it."""
+        """One epoch: the command first, planned on the previous epoch's estimates, then the re-fit with
+        the ranges the latest fixes aligned, and the stop rule on it (module docstring); the next epoch
+        plans on this re-fit."""
         self.epochs += 1
         rec = arrival.record
         assert isinstance(rec, RangeRecord)
