@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test test-slow bench lint install system gnatss clean
+.PHONY: demo test test-slow bench lint install system gnatss setup clean
 
 # GNATSS (the community's GNSS-A package) is the oracle of the GNSS-A tests and benchmark. Its pins
 # (xarray<2025, pydantic==2.8.2, numba) clash with ours, so it gets its own environment, built once
@@ -40,11 +40,15 @@ system:
 demo: $(STAMP)
 	$(BIN)/oceanloc demo --out oceanloc-demo
 
-# Tests run in as many processes as there are cores (pytest-xdist), a test file per process at a time.
-test: $(STAMP) system gnatss
+# The set-up steps run side by side (pip, apt-get and GNATSS's pip are mostly waiting on downloads);
+# tests run in as many processes as there are cores (pytest-xdist), a test file per process at a time.
+setup:
+	@$(MAKE) --no-print-directory -j3 install system gnatss
+
+test: setup
 	$(BIN)/python -m pytest -m "not slow" -n auto --dist loadfile
 
-test-slow: $(STAMP) system gnatss
+test-slow: setup
 	$(BIN)/python -m pytest -m slow
 
 bench: $(STAMP) gnatss
