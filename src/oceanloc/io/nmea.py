@@ -237,7 +237,7 @@ class NmeaLineParser:
         qc.records_kept += 1
         return GpsFix(t_unix_s=t, lat_deg=lat, lon_deg=lon, h_m=h, source=str(p), line=number)
 
-    def _fast_values(self, number: int, text: str, qc: QcReport) -> tuple | None | object:
+    def _fast_values(self, number: int, text: str, qc: QcReport) -> tuple | object | None:
         """One line by plain string operations, or ``_SLOW`` where pynmea2 must decide.
 
         Accepts only what the pynmea2 path (:meth:`feed` with ``fast=False``) accepts with no QC issue,
