@@ -201,10 +201,14 @@ def lines(draw) -> str:
     elif kind == "ZDA":
         fields = [
             pick(GOOD_TIMES, BAD_TIMES),
-            pick(st.sampled_from(["04", "4", "31", "15"]), st.sampled_from(["00", "", "x", "32", "-1"])),
+            pick(
+                st.sampled_from(["04", "4", "31", "15"]),
+                st.sampled_from(["00", "", "x", "32", "-1", "9" * 30]),
+            ),
             pick(st.sampled_from(["01", "1", "12"]), st.sampled_from(["02", "13", "", "00"])),
             pick(
-                st.sampled_from(["2018", "2024", "1980", "2099"]), st.sampled_from(["1979", "2100", "18", ""])
+                st.sampled_from(["2018", "2024", "1980", "2099"]),
+                st.sampled_from(["1979", "2100", "18", "", "9" * 40]),
             ),
             "00",
             "00",

@@ -10,6 +10,11 @@ outside its physical range (latitude, longitude, height, date, heading) is skipp
 and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same fixes with
 the same QC issues; :func:`gps_log_from_records` turns the records into a :class:`GpsLog`.
 
+Speed: a well-formed GGA, RMC, HDT or ZDA sentence that is kept is read by plain string operations
+(checksum, fields, the same floats bit for bit); every other line, and every line with a QC issue, goes
+through pynmea2, the reference, so each reason and detail is pynmea2's reading
+(``tests/io/test_nmea_fast.py`` compares the two).
+
 Example::
 
     $GPZDA,184353.00,04,01,2018,00,00*60
@@ -359,7 +364,7 @@ def _digits_date(year: str, month: str, day: str) -> dt.date | None:
         return None
     try:
         date = dt.date(int(year), int(month), int(day))
-    except ValueError:
+    except (ValueError, OverflowError):
         return None
     return date if _FIRST_YEAR <= date.year < _LAST_YEAR else None
 

@@ -18,7 +18,9 @@ logs joined) switches the column from there on.
 
 :class:`UsblLineParser` holds these rules, one line at a time: :func:`read_usbl` feeds it a file's lines
 and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same ranges with
-the same QC issues; :func:`range_log_from_records` turns the records into a :class:`RangeLog`.
+the same QC issues; :func:`range_log_from_records` turns the records into a :class:`RangeLog`. A plain
+``YYYY-MM-DDTHH:MM:SS.fffZ,beacon,value`` line that is kept is read by string operations (the bulk
+speed of ``survey add``); every other line by the general rules, which alone name QC issues.
 """
 
 from __future__ import annotations
