@@ -10,6 +10,11 @@ outside its physical range (latitude, longitude, height, date, heading) is skipp
 and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same fixes with
 the same QC issues; :func:`gps_log_from_records` turns the records into a :class:`GpsLog`.
 
+Speed: a well-formed GGA, RMC, HDT or ZDA sentence that is kept is read by plain string operations
+(checksum, fields, the same floats bit for bit); every other line, and every line with a QC issue, goes
+through pynmea2, the reference, so each reason and detail is pynmea2's reading
+(``tests/io/test_nmea_fast.py`` compares the two).
+
 Example::
 
     $GPZDA,184353.00,04,01,2018,00,00*60
@@ -23,6 +28,8 @@ import datetime as dt
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import reduce
+from operator import xor
 from pathlib import Path
 
 import numpy as np
@@ -94,15 +101,21 @@ def read_nmea(path: str | Path, qc: QcReport | None = None) -> GpsLog:
     p = Path(path)
     qc = QcReport() if qc is None else qc
     parser = NmeaLineParser()
-    fixes: list[GpsFix] = []
-    headings: list[Heading] = []
+    fast = parser._fast_values
+    fixes: list[tuple[float, float, float, float, int]] = []
+    headings: list[tuple[float, float, int]] = []
     for number, text in read_lines(p, qc):
-        rec = parser.feed(number, text, qc, p)
-        if isinstance(rec, GpsFix):
-            fixes.append(rec)
-        elif isinstance(rec, Heading):
-            headings.append(rec)
-    return gps_log_from_records(fixes, headings, qc, str(p))
+        # Bulk path: the common well-formed sentences as plain tuples, every other line through feed.
+        values = fast(number, text, qc)
+        if values is _SLOW:
+            rec = parser.feed(number, text, qc, p, fast=False)
+            if isinstance(rec, GpsFix):
+                fixes.append((rec.t_unix_s, rec.lat_deg, rec.lon_deg, rec.h_m, number))
+            elif isinstance(rec, Heading):
+                headings.append((rec.t_unix_s, rec.heading_deg, number))
+        elif values is not None:
+            (fixes if len(values) == 5 else headings).append(values)
+    return _gps_log(fixes, headings, qc, str(p))
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -160,9 +173,25 @@ class NmeaLineParser:
         self.date: dt.date | None = None
         self.last_t = -math.inf
 
-    def feed(self, number: int, text: str, qc: QcReport, source: str | Path) -> GpsFix | Heading | None:
-        """The record of one line of text (already decoded, see :func:`~oceanloc.io.qc.decode_line`)."""
+    def feed(
+        self, number: int, text: str, qc: QcReport, source: str | Path, *, fast: bool = True
+    ) -> GpsFix | Heading | None:
+        """The record of one line of text (already decoded, see :func:`~oceanloc.io.qc.decode_line`).
+
+        A well-formed GGA, RMC, HDT or ZDA sentence goes through a plain-string fast path
+        (:meth:`_fast_values`); any line it does not fully accept, through pynmea2 (``fast=False``: only
+        the latter), which gives every QC reason and detail. Both give the same records and state.
+        """
         p = source
+        if fast:
+            values = self._fast_values(number, text, qc)
+            if values is None:
+                return None
+            if values is not _SLOW:
+                if len(values) == 5:
+                    t, lat, lon, h, _ = values
+                    return GpsFix(t_unix_s=t, lat_deg=lat, lon_deg=lon, h_m=h, source=str(p), line=number)
+                return Heading(t_unix_s=values[0], heading_deg=values[1], source=str(p), line=number)
         start = text.find("$")
         if start < 0:
             qc.add(p, number, "truncated sentence", "no '$'")
@@ -213,15 +242,151 @@ class NmeaLineParser:
         qc.records_kept += 1
         return GpsFix(t_unix_s=t, lat_deg=lat, lon_deg=lon, h_m=h, source=str(p), line=number)
 
+    def _fast_values(self, number: int, text: str, qc: QcReport) -> tuple | object | None:
+        """One line by plain string operations, or ``_SLOW`` where pynmea2 must decide.
+
+        Accepts only what the pynmea2 path (:meth:`feed` with ``fast=False``) accepts with no QC issue,
+        giving the same values bit for bit and the same state change: an ASCII ``$ttGGA``, ``$ttRMC``,
+        ``$ttHDT`` or ``$ttZDA`` sentence (talker not ``P...``, no second ``*``) whose ``*HH`` checksum
+        is right, with digits-only times, dates, hemispheres N/S E/W, ``DDMM.mmm`` coordinates and values
+        in range; a fix also needs a date and a time after the latest fix's. Returns
+        ``(t, lat, lon, h, line)`` for a fix, ``(t, heading, line)`` for a heading, None for a date
+        sentence, ``_SLOW`` for anything else (nothing changed then).
+        """
+        start = text.find("$")
+        if start < 0 or text[-3:-2] != "*" or not text.isascii():
+            return _SLOW
+        body = text[start + 1 : -3]
+        if "*" in body or body[5:6] != "," or body[:1] in ("P", "p") or not body[:2].isalnum():
+            return _SLOW
+        if _HEX.get(text[-2:]) != reduce(xor, body.encode(), 0):
+            return _SLOW
+        kind = body[2:5]
+        f = body[6:].split(",")
+        if kind == "GGA":
+            if len(f) < 11 or self.date is None or not f[5].isdigit() or int(f[5]) == 0:
+                return _SLOW
+            day_s = _day_seconds(f[0])
+            lat = _signed_deg(f[1], f[2], "N", "S", 90.0)
+            lon = _signed_deg(f[3], f[4], "E", "W", 180.0)
+            if day_s is None or lat is None or lon is None:
+                return _SLOW
+            try:
+                h = float(f[8]) + float(f[10] or 0.0)
+            except ValueError:
+                return _SLOW
+            if not HEIGHT_RANGE_M[0] <= h <= HEIGHT_RANGE_M[1]:
+                return _SLOW
+            whole_s, us = day_s
+            # As datetime.timestamp(): whole microseconds since the epoch, divided once.
+            t = ((self.date.toordinal() - _EPOCH_ORDINAL) * 86_400 + whole_s) * 1_000_000 + us
+            t /= 1_000_000
+            if not (TIME_RANGE_UNIX_S[0] <= t <= TIME_RANGE_UNIX_S[1]) or t <= self.last_t:
+                return _SLOW
+            self.last_t = t
+            qc.records_kept += 1
+            return (t, lat, lon, h, number)
+        if kind == "HDT":
+            s = f[0]
+            if not s.replace(".", "", 1).isdigit():
+                return _SLOW
+            heading = float(s)
+            if heading > 360.0:
+                return _SLOW
+            return (self.last_t, heading, number)
+        if kind == "ZDA":
+            if len(f) < 4 or _day_seconds(f[0]) is None:
+                return _SLOW
+            date = _digits_date(f[3], f[2], f[1])
+            if date is None:
+                return _SLOW
+            self.date = date
+            return None
+        if kind == "RMC":
+            if len(f) < 9 or f[1] != "A" or (f[0] and _day_seconds(f[0]) is None):
+                return _SLOW
+            if (f[2] or f[4]) and (
+                _signed_deg(f[2], f[3], "N", "S", 90.0) is None
+                or _signed_deg(f[4], f[5], "E", "W", 180.0) is None
+            ):
+                return _SLOW
+            d = f[8]
+            if d:
+                if len(d) != 6:
+                    return _SLOW
+                yy = d[4:]
+                date = _digits_date(("20" if yy < "69" else "19") + yy, d[2:4], d[:2])
+                if date is None:
+                    return _SLOW
+                self.date = date
+            return None
+        return _SLOW
+
+
+_SLOW = object()
+"""What :meth:`NmeaLineParser._fast_values` returns for a line the pynmea2 path must decide."""
+
+_HEX = {a + b: int(a + b, 16) for a in "0123456789ABCDEFabcdef" for b in "0123456789ABCDEFabcdef"}
+_EPOCH_ORDINAL = dt.date(1970, 1, 1).toordinal()
+
+
+def _day_seconds(s: str) -> tuple[int, int] | None:
+    """Whole seconds of the day and microseconds of ``HHMMSS[.s...]`` as pynmea2 reads it, else None."""
+    frac = s[6:]
+    if len(s) < 6 or not s[:6].isdigit() or (frac and (frac[0] != "." or not frac[1:].isdigit())):
+        return None
+    hour, minute, second = int(s[:2]), int(s[2:4]), int(s[4:6])
+    us = int(float(frac) * 1_000_000) if frac else 0  # pynmea2's own rounding of the fraction
+    if hour > 23 or minute > 59 or second > 59 or us > 999_999:
+        return None
+    return hour * 3600 + minute * 60 + second, us
+
+
+def _signed_deg(dm: str, hemisphere: str, plus: str, minus: str, limit: float) -> float | None:
+    """A ``DDDMM.mmm`` coordinate with its hemisphere as pynmea2's ``dm_to_sd``, within ``limit``."""
+    if hemisphere != plus and hemisphere != minus:
+        return None
+    if dm == "0":
+        sd = 0.0
+    else:
+        dot = dm.find(".")
+        if dot < 3 or not dm[:dot].isdigit() or not dm[dot + 1 :].isdigit():
+            return None
+        sd = float(dm[: dot - 2]) + float(dm[dot - 2 :]) / 60
+    if not sd <= limit:
+        return None
+    return sd if hemisphere == plus else -sd
+
+
+def _digits_date(year: str, month: str, day: str) -> dt.date | None:
+    """The date of digit-only fields, if valid and within the years the readers accept, else None."""
+    if not (year.isdigit() and month.isdigit() and day.isdigit()):
+        return None
+    try:
+        date = dt.date(int(year), int(month), int(day))
+    except (ValueError, OverflowError):
+        return None
+    return date if _FIRST_YEAR <= date.year < _LAST_YEAR else None
+
 
 def gps_log_from_records(
     fixes: Sequence[GpsFix], headings: Sequence[Heading], qc: QcReport, source: str = "stream"
 ) -> GpsLog:
     """The :class:`GpsLog` of collected records, as :func:`read_nmea` returns it (DataError if no fix)."""
+    return _gps_log(
+        [(f.t_unix_s, f.lat_deg, f.lon_deg, f.h_m, f.line) for f in fixes],
+        [(h.t_unix_s, h.heading_deg, h.line) for h in headings],
+        qc,
+        source,
+    )
+
+
+def _gps_log(fixes: list[tuple], headings: list[tuple], qc: QcReport, source: str) -> GpsLog:
+    """The :class:`GpsLog` of ``(t, lat, lon, h, line)`` fixes and ``(t, heading, line)`` headings."""
     if not fixes:
         raise DataError(f"{source}: no valid GPS fix ({qc.summary(max_lines=3)})")
-    a = np.asarray([(f.t_unix_s, f.lat_deg, f.lon_deg, f.h_m) for f in fixes], dtype=float)
-    hd = np.asarray([(h.t_unix_s, h.heading_deg) for h in headings], dtype=float).reshape(-1, 2)
+    a = np.asarray(fixes, dtype=float)
+    hd = np.asarray(headings, dtype=float).reshape(-1, 3)
     return GpsLog(
         t_unix_s=a[:, 0],
         lat_deg=a[:, 1],
@@ -229,9 +394,9 @@ def gps_log_from_records(
         h_m=a[:, 3],
         heading_t_unix_s=hd[:, 0],
         heading_deg=hd[:, 1],
-        line=np.asarray([f.line for f in fixes], dtype=np.int64),
+        line=np.asarray([f[4] for f in fixes], dtype=np.int64),
         qc=qc,
-        heading_line=np.asarray([h.line for h in headings], dtype=np.int64),
+        heading_line=np.asarray([h[2] for h in headings], dtype=np.int64),
     )
 
 

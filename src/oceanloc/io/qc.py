@@ -169,10 +169,23 @@ def read_lines(path: str | Path, qc: QcReport) -> Iterator[tuple[int, str]]:
         except UnicodeDecodeError:
             qc.add(p, 0, "wrong encoding", "UTF-16 byte-order mark but undecodable content")
             return
+    if raw.isascii() and not any(c in raw for c in _NOT_PLAIN_ASCII):
+        # The common case, decoded at once: for ASCII without these bytes, str.splitlines and
+        # str.strip split and strip exactly as bytes.splitlines and decode_line do.
+        for number, line in enumerate(raw.decode("ascii").splitlines(), start=1):
+            text = line.strip()
+            if text:
+                qc.lines_read += 1
+                yield number, text
+        return
     for number, line in enumerate(raw.splitlines(), start=1):
         text = decode_line(line, number, qc, p)
         if text is not None:
             yield number, text
+
+
+_NOT_PLAIN_ASCII = (b"\x00", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\x1f")
+"""Bytes on which str and bytes line splitting or stripping differ, and NUL (a ``wrong encoding``)."""
 
 
 def decode_line(raw: bytes | str, number: int, qc: QcReport, source: str | Path) -> str | None:

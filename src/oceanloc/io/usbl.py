@@ -18,7 +18,9 @@ logs joined) switches the column from there on.
 
 :class:`UsblLineParser` holds these rules, one line at a time: :func:`read_usbl` feeds it a file's lines
 and a live stream (:mod:`oceanloc.io.streams`) the lines it receives, so both keep the same ranges with
-the same QC issues; :func:`range_log_from_records` turns the records into a :class:`RangeLog`.
+the same QC issues; :func:`range_log_from_records` turns the records into a :class:`RangeLog`. A plain
+``YYYY-MM-DDTHH:MM:SS.fffZ,beacon,value`` line that is kept is read by string operations (the bulk
+speed of ``survey add``); every other line by the general rules, which alone name QC issues.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from oceanloc.io.nmea import GpsLog
 from oceanloc.io.qc import (
     BEACON_ID_RANGE,
     MAX_RANGE_M,
+    TIME_RANGE_UNIX_S,
     QcReport,
     read_lines,
     time_problem,
@@ -89,8 +92,26 @@ def read_usbl(
     p = Path(path)
     qc = QcReport() if qc is None else qc
     parser = UsblLineParser(sound_speed_mps=sound_speed_mps, beacons=beacons, max_range_m=max_range_m)
-    records = [parser.feed(number, text, qc, p) for number, text in read_lines(p, qc)]
-    return range_log_from_records(records, qc, str(p))
+    fast = parser._fast_values
+    rows: list[tuple[float, int, float, int]] = []
+    for number, text in read_lines(p, qc):
+        # Bulk path: the common well-formed lines as plain tuples, every other line through feed.
+        values = fast(number, text, qc)
+        if values is _SLOW:
+            rec = parser.feed(number, text, qc, p, fast=False)
+            if rec is not None and rec.ok and rec.range_m is not None:
+                rows.append((rec.t_unix_s, rec.beacon, rec.range_m, number))
+        else:
+            rows.append(values)
+    if not rows:
+        raise DataError(f"{p}: no valid range ({qc.summary(max_lines=3)})")
+    return RangeLog(
+        t_unix_s=np.asarray([r[0] for r in rows], dtype=float),
+        beacon=np.asarray([r[1] for r in rows], dtype=np.int64),
+        range_m=np.asarray([r[2] for r in rows], dtype=float),
+        line=np.asarray([r[3] for r in rows], dtype=np.int64),
+        qc=qc,
+    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -157,7 +178,7 @@ class UsblLineParser:
     same time and beacon is a ``duplicate record``; times never go back, so no older one can match).
     """
 
-    __slots__ = ("_at_last_t", "column", "known", "last_t", "max_range_m", "sound_speed_mps")
+    __slots__ = ("_at_last_t", "_days", "column", "known", "last_t", "max_range_m", "sound_speed_mps")
 
     def __init__(
         self,
@@ -179,11 +200,26 @@ class UsblLineParser:
         self.column = column
         self.last_t = -math.inf
         self._at_last_t: dict[int, tuple[float, int]] = {}  # beacon -> (range_m, line) at last_t
+        self._days: dict[str, int] = {}  # YYYY-MM-DD -> days since 1970-01-01, for the fast path
 
-    def feed(self, number: int, text: str, qc: QcReport, source: str | Path) -> RangeRecord | None:
+    def feed(
+        self, number: int, text: str, qc: QcReport, source: str | Path, *, fast: bool = True
+    ) -> RangeRecord | None:
         """The range of one line of text (already decoded, see :func:`~oceanloc.io.qc.decode_line`), or
-        None (a header, a comment, or a line skipped and recorded as ``source:number: reason``)."""
+        None (a header, a comment, or a line skipped and recorded as ``source:number: reason``).
+
+        A plain ``YYYY-MM-DDTHH:MM:SS.fffZ,beacon,value`` line kept goes through a string fast path
+        (:meth:`_fast_values`, ``fast=False``: never); every other line through the general rules."""
         p = source
+        if fast:
+            values = self._fast_values(number, text, qc)
+            if values is not _SLOW:
+                t, beacon, rng, _ = values
+                factor = RANGE_COLUMNS[self.column]
+                owtt = None if factor == 0.0 else rng / self.sound_speed_mps
+                return RangeRecord(
+                    t_unix_s=t, beacon=beacon, range_m=rng, travel_time_s=owtt, source=str(p), line=number
+                )
         if text.startswith("#"):
             qc.lines_read -= 1
             return None
@@ -246,6 +282,78 @@ class UsblLineParser:
         return RangeRecord(
             t_unix_s=t, beacon=beacon, range_m=rng, travel_time_s=owtt, source=str(p), line=number
         )
+
+    def _fast_values(self, number: int, text: str, qc: QcReport) -> tuple[float, int, float, int] | object:
+        """``(t, beacon, range_m, line)`` of a line :meth:`feed` keeps, by string operations, or ``_SLOW``.
+
+        Accepts only an ASCII ``YYYY-MM-DDTHH:MM:SS.fff[fff]Z,digits,number`` line (no spaces) that the
+        general rules keep with no QC issue, with the same values bit for bit and the same state change;
+        anything else (a header, a comment, any problem) gives ``_SLOW`` and changes nothing.
+        """
+        fields = text.split(",")
+        if len(fields) != 3 or self.column is None or not text.isascii():
+            return _SLOW
+        stamp, beacon_s, value_s = fields
+        n = len(stamp)
+        if (
+            (n != 24 and n != 27)
+            or stamp[4] != "-"
+            or stamp[7] != "-"
+            or stamp[10] != "T"
+            or stamp[19] != "."
+            or stamp[-1] != "Z"
+            or stamp[13] != ":"
+            or stamp[16] != ":"
+            or not (
+                stamp[:4] + stamp[5:7] + stamp[8:10] + stamp[11:13] + stamp[14:16] + stamp[17:19]
+            ).isdigit()
+            or not stamp[20:-1].isdigit()
+            or not beacon_s.isdigit()
+            or value_s != value_s.strip()
+        ):
+            return _SLOW
+        days = self._days.get(stamp[:10])
+        if days is None:
+            try:
+                date = dt.date.fromisoformat(stamp[:10])
+            except ValueError:
+                return _SLOW
+            days = self._days[stamp[:10]] = date.toordinal() - _EPOCH_ORDINAL
+        hour, minute, second = int(stamp[11:13]), int(stamp[14:16]), int(stamp[17:19])
+        if hour > 23 or minute > 59 or second > 59:
+            return _SLOW
+        us = int(stamp[20:-1]) * (1000 if n == 24 else 1)
+        # As datetime.timestamp(): whole microseconds since the epoch, divided once.
+        t = ((days * 86_400 + hour * 3600 + minute * 60 + second) * 1_000_000 + us) / 1_000_000
+        beacon = int(beacon_s)
+        try:
+            value = float(value_s)
+        except ValueError:
+            return _SLOW
+        factor = RANGE_COLUMNS[self.column]
+        rng = value if factor == 0.0 else factor * self.sound_speed_mps * value
+        if (
+            not TIME_RANGE_UNIX_S[0] <= t <= TIME_RANGE_UNIX_S[1]
+            or beacon > BEACON_ID_RANGE[1]
+            or not math.isfinite(value)
+            or not 0.0 < rng <= self.max_range_m
+            or (self.known is not None and beacon not in self.known)
+            or t < self.last_t
+            or (t == self.last_t and beacon in self._at_last_t)
+        ):
+            return _SLOW
+        if t > self.last_t:
+            self._at_last_t.clear()
+            self.last_t = t
+        self._at_last_t[beacon] = (rng, number)
+        qc.records_kept += 1
+        return (t, beacon, rng, number)
+
+
+_SLOW = object()
+"""What :meth:`UsblLineParser._fast_values` returns for a line the general rules must decide."""
+
+_EPOCH_ORDINAL = dt.date(1970, 1, 1).toordinal()
 
 
 def range_log_from_records(
