@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 
-
 from oceanloc.sim.gnatss_survey import ArraySurveySpec, simulate_array_survey
 
 
