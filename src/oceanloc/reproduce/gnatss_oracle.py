@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,19 +35,22 @@ from gnatss.configs.io import CSVOutput
 from gnatss.ops.data import data_loading
 from gnatss.ops.io import to_file
 from gnatss.solver.run import run_solver
-t1 = time.perf_counter()
-config, data = data_loading(sys.argv[1], remove_outliers=sys.argv[2] == "1", skip_posfilter=True)
-t2 = time.perf_counter()
-c2 = time.process_time()
-data = run_solver(config, data)
-t3 = time.perf_counter()
-c3 = time.process_time()
-to_file(config, data, "residuals", CSVOutput.residuals)
-to_file(config, data, "outliers", CSVOutput.outliers)
-to_file(config, data, "process_dataset", "process_dataset.nc", file_format="netcdf")
 import gnatss
-print("ORACLE " + json.dumps({"version": gnatss.__version__, "import_s": t1 - t0, "load_s": t2 - t1,
-      "solve_s": t3 - t2, "solve_cpu_s": c3 - c2, "total_s": time.perf_counter() - t0}))
+t1 = time.perf_counter()
+for index, path in enumerate(sys.argv[2:]):
+    t2 = time.perf_counter()
+    config, data = data_loading(path, remove_outliers=sys.argv[1] == "1", skip_posfilter=True)
+    t3 = time.perf_counter()
+    c3 = time.process_time()
+    data = run_solver(config, data)
+    t4 = time.perf_counter()
+    c4 = time.process_time()
+    to_file(config, data, "residuals", CSVOutput.residuals)
+    to_file(config, data, "outliers", CSVOutput.outliers)
+    to_file(config, data, "process_dataset", "process_dataset.nc", file_format="netcdf")
+    print("ORACLE " + json.dumps({"index": index, "version": gnatss.__version__, "import_s": t1 - t0,
+          "load_s": t3 - t2, "solve_s": t4 - t3, "solve_cpu_s": c4 - c3,
+          "total_s": time.perf_counter() - t2}), flush=True)
 """
 
 
@@ -122,27 +124,52 @@ def run_gnatss(
     DataError
         If the environment is missing or GNATSS fails (the last lines of its output in the message).
     """
+    return run_gnatss_many([config_path], [output], remove_outliers, timeout_s, extra_env)[0]
+
+
+def run_gnatss_many(
+    config_paths: list[str | Path],
+    outputs: list[str | Path],
+    remove_outliers: bool = False,
+    timeout_s: float = 900.0,
+    extra_env: dict[str, str] | None = None,
+) -> list[GnatssRun]:
+    """Run GNATSS's solver on several configurations in ONE subprocess (GNATSS's imports, about 4 s, are
+    paid once: the oracle's Monte Carlo tests solve several surveys) and read each one's outputs.
+
+    ``outputs[k]`` must be the ``output.path`` of ``config_paths[k]``. Each run's ``total_s`` is its own
+    loading, solving and writing (without the shared imports).
+
+    Raises
+    ------
+    DataError
+        If the environment is missing or GNATSS fails on any configuration.
+    """
+    python = gnatss_python()
+    if python is None:
+        raise DataError("gnatss is not installed: run `make gnatss` (builds .venv-gnatss)")
+    if len(config_paths) != len(outputs):
+        raise DataError("run_gnatss_many needs one output folder per configuration")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env.update(extra_env or {})
+    args = [str(python), "-c", _RUNNER, "1" if remove_outliers else "0", *map(str, config_paths)]
+    proc = subprocess.run(args, capture_output=True, text=True, env=env, timeout=timeout_s, check=False)
+    infos = [
+        json.loads(x.removeprefix("ORACLE ")) for x in proc.stdout.splitlines() if x.startswith("ORACLE ")
+    ]
+    if proc.returncode != 0 or len(infos) != len(config_paths):
+        tail = " | ".join((proc.stderr or proc.stdout).strip().splitlines()[-3:])
+        failed = config_paths[len(infos)] if len(infos) < len(config_paths) else config_paths[-1]
+        raise DataError(f"gnatss failed on {failed} (exit {proc.returncode}): {tail}")
+    return [_read_run(Path(out), info) for out, info in zip(outputs, infos, strict=True)]
+
+
+def _read_run(out: Path, info: dict) -> GnatssRun:
+    """One GNATSS run's outputs (``process_dataset.nc`` and the CSV files in ``out``)."""
     import xarray as xr
 
     from oceanloc.io.gnatss import read_deletions
 
-    python = gnatss_python()
-    if python is None:
-        raise DataError("gnatss is not installed: run `make gnatss` (builds .venv-gnatss)")
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
-    env.update(extra_env or {})
-    start = time.perf_counter()
-    proc = subprocess.run(
-        [str(python), "-c", _RUNNER, str(config_path), "1" if remove_outliers else "0"],
-        capture_output=True, text=True, env=env, timeout=timeout_s, check=False,
-    )  # fmt: skip
-    wall = time.perf_counter() - start
-    marker = [line for line in proc.stdout.splitlines() if line.startswith("ORACLE ")]
-    if proc.returncode != 0 or not marker:
-        tail = " | ".join((proc.stderr or proc.stdout).strip().splitlines()[-3:])
-        raise DataError(f"gnatss failed on {config_path} (exit {proc.returncode}): {tail}")
-    info = json.loads(marker[-1].removeprefix("ORACLE "))
-    out = Path(output)
     with xr.open_dataset(out / "process_dataset.nc") as ds:
         last = ds.isel(iteration=-1)
         xyz = np.asarray(last["transponders_xyz"].values, dtype=float)
@@ -156,7 +183,7 @@ def run_gnatss(
     return GnatssRun(
         output=out, version=str(info["version"]), solve_s=float(info["solve_s"]),
         solve_cpu_s=float(info.get("solve_cpu_s", "nan")),
-        load_s=float(info["load_s"]), total_s=wall, position_xyz_m=xyz, delta_enu_m=d_enu,
+        load_s=float(info["load_s"]), total_s=float(info["total_s"]), position_xyz_m=xyz, delta_enu_m=d_enu,
         sigma_enu_m=s_enu, iterations=n_it,
         residuals=read_epoch_residuals(out / "residuals.csv"), outliers=outliers, deletions=deletions,
     )  # fmt: skip

@@ -40,6 +40,8 @@ from oceanloc.io.gnatss import (
     write_sound_speed_profile,
 )
 from oceanloc.io.qc import QcReport
+from oceanloc.models.sound_profile import SoundSpeedProfile as LayeredProfile
+from oceanloc.models.sound_profile import ray_travel_time_s
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -78,6 +80,7 @@ class ArraySurveySpec:
     gradient_per_km: tuple[float, float] = (0.0, 0.0)
     residual_limit_cm: float = 25.0
     distance_limit_m: float = 150.0
+    ray_traced: bool = False
     seed: int = 13
 
     def __post_init__(self) -> None:
@@ -198,6 +201,21 @@ def _to_ecef(enu: FloatArray, origin: EnuOrigin) -> FloatArray:
     return np.stack([x, y, z], axis=-1)
 
 
+def _ray_legs_s(
+    prof: LayeredProfile, tx: FloatArray, rx: FloatArray, tp: FloatArray, surface_m: float
+) -> FloatArray:
+    """Two-way eigenray time (s) of transmit ``tx`` and receive ``rx`` transducer positions ``(n, m, 3)``
+    to the transponders ``tp`` ``(m, 3)``, ENU metres, with the sea surface at ENU height ``surface_m``."""
+    total = np.zeros(rx.shape[:2])
+    for end in (np.broadcast_to(tx, rx.shape), rx):
+        top = np.maximum(surface_m - end[..., 2], 0.0)
+        bottom = np.broadcast_to(surface_m - tp[:, 2], top.shape)
+        horizontal = np.linalg.norm(end[..., :2] - tp[:, :2], axis=-1)
+        t, _, _ = ray_travel_time_s(prof, top.ravel(), bottom.ravel(), horizontal.ravel())
+        total = total + t.reshape(top.shape)
+    return total
+
+
 def simulate_array_survey(spec: ArraySurveySpec) -> ArraySurveyTruth:
     """Draw the synthetic survey (deterministic for a given ``spec.seed``)."""
     rng = np.random.default_rng(spec.seed)
@@ -242,7 +260,12 @@ def simulate_array_survey(spec: ArraySurveySpec) -> ArraySurveyTruth:
         mid = 0.5 * (
             0.5 * (trans_tx[:, None, :] + trans_rx) + truth_enu
         )  # ray midpoint: gradient sampled there
-        twtt = path / speed(t_tx_rel, mid) + delays
+        if spec.ray_traced:
+            layered = LayeredProfile(depth_m=z, speed_mps=c, source="synthetic")
+            twtt = _ray_legs_s(layered, trans_tx[:, None, :], trans_rx, truth_enu, spec.geoid_undulation_m)
+            twtt = twtt * c_hm / speed(t_tx_rel, mid) + delays
+        else:
+            twtt = path / speed(t_tx_rel, mid) + delays
     measured = twtt + rng.normal(0.0, spec.sigma_twtt_s, twtt.shape)
     gross = rng.random(twtt.shape) < spec.gross_fraction
     measured = measured + np.where(gross, rng.choice([-1.0, 1.0], twtt.shape) * spec.gross_error_s, 0.0)
