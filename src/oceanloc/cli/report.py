@@ -19,8 +19,8 @@ def report(
     source: Annotated[
         Path,
         typer.Argument(
-            help="A survey journal (SQLite) or a JSON record of simulate survey, localize gnssa, reproduce "
-            "or drift-plan.",
+            help="A survey journal (SQLite) or a JSON record of simulate survey, localize gnssa (surveys, "
+            "or an array with --format gnatss), reproduce or drift-plan.",
             show_default=False,
         ),
     ],

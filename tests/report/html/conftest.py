@@ -33,6 +33,7 @@ COMMANDS = {
         "1",
     ],
     "gnssa": ["localize", "gnssa"],
+    "gnssa-array": ["localize", "gnssa", "--format", "gnatss"],
     "reproduction": ["reproduce", "garcia2019", "--runs", "3", "--workers", "1"],
     "drift": ["drift-plan", "--scenario", "dillard-drift-continuous"],
 }

@@ -39,6 +39,7 @@ EXPECTED = {
     "journal": (2, 4, "GPS track"),
     "survey": (4, 1, "measurement sites (in order)"),
     "gnssa": (5, 6, "survey positions (in time order)"),
+    "gnssa-array": (3, 2, "array centre (estimated)"),
     "drift": (0, 3, "flight legs"),
     "montecarlo": (0, 3, None),
     "reproduction": (0, None, None),

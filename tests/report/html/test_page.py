@@ -9,7 +9,7 @@ from oceanloc.report.html.model import Estimate, MapLayers, Report
 from oceanloc.report.html.page import MAX_TRACK_POINTS, map_figure, render_html
 from oceanloc.report.html.sources import detect_kind
 
-KINDS = ("journal", "survey", "montecarlo", "gnssa", "reproduction", "drift")
+KINDS = ("journal", "survey", "montecarlo", "gnssa", "gnssa-array", "reproduction", "drift")
 
 
 def _names(fig) -> list[str]:
@@ -210,6 +210,53 @@ def test_gnssa_without_pings_has_no_ping_panel_and_says_so(reports, sources):
     rep = gnssa_report(rec)
     assert not any(s.title.startswith("Residuals per ping") for s in rep.series)
     assert "not per-ping residuals" in " ".join(rep.notes)
+
+
+def test_gnssa_array_one_ellipse_per_transponder_ping_panel_and_checks(sources, reports):
+    rec = json.loads(sources["gnssa-array"].read_text())
+    rep = reports["gnssa-array"]
+    ids = [t["id"] for t in rec["transponders"]]
+    names = _names(map_figure(rep.map))
+    assert sorted(n for n in names if n.startswith("95% ellipse")) == [
+        f"95% ellipse {i}" for i in sorted(ids)
+    ]
+    assert "array centre (estimated)" in names and rep.map.origin is not None
+    # the east-north block of the covariance: an axis-aligned ellipse's semi-axes would be 2.448 sd E, sd N;
+    # the rotated one's area is the same: a * b = 2.448^2 sd E sd N sqrt(1 - rho^2) <= 2.448^2 sd E sd N
+    cov = np.asarray(rec["details"]["covariance_m2"])
+    for k, (t, e) in enumerate(zip(rec["transponders"], rep.map.estimates, strict=True)):
+        block = cov[3 * k : 3 * k + 2, 3 * k : 3 * k + 2]
+        assert e.semi_major_m * e.semi_minor_m == pytest.approx(
+            5.991 * np.sqrt(np.linalg.det(block)), rel=1e-3
+        )
+        assert np.sqrt(block[0, 0]) == pytest.approx(t["sigma_e_m"], rel=1e-9)
+    assert any(n.startswith("inset ellipse") for n in names)  # cm-sized ellipses on a km-sized map
+    pings = rep.series[0]
+    excluded = sum(rec["pings"]["excluded"])
+    assert pings.title == f"Residuals per ping: array ({excluded} of {rec['replies']} excluded)"
+    assert [line[0] for line in pings.lines if not line[0].startswith("excluded")] == [
+        f"transponder {i} used" for i in sorted(ids)
+    ]
+    assert sum(len(line[1]) for line in pings.lines if line[0].startswith("excluded")) == excluded
+    assert rep.series[1].title.startswith("Sound speed at the knots")
+    assert len(rep.series[1].lines[0][1]) == len(rec["details"]["knot_times_s"])
+    assert [c.name for c in rep.checks] == [
+        "solver converged",
+        "replies used vs excluded: at most 5 % excluded",
+    ]
+    assert rep.checks[0].passed is bool(rec["converged"])
+    assert rep.checks[1].value == f"{rec['replies'] - excluded} used, {excluded} excluded"
+    assert len(rep.tables[1].rows) == len(rec["iterations"])
+    page = render_html(rep)
+    assert page.count('<tr class="check ') == 2 and "outlier" in page
+
+
+def test_gnssa_array_without_knots_has_no_sound_speed_panel(sources):
+    from oceanloc.report.html.records import gnssa_array_report
+
+    rec = json.loads(sources["gnssa-array"].read_text())
+    rec["details"]["knot_times_s"] = []
+    assert [s.title.split(":")[0] for s in gnssa_array_report(rec).series] == ["Residuals per ping"]
 
 
 def test_gnssa_pings_of_unequal_length_are_a_data_error(sources, tmp_path):

@@ -1,4 +1,5 @@
-"""Reports of the JSON records oceanloc writes: simulated survey, Monte Carlo, GNSS-A, reproduction, drift.
+"""Reports of the JSON records oceanloc writes: simulated survey, Monte Carlo, GNSS-A (surveys of one
+transponder, or one survey of an array), reproduction, drift.
 
 Each ``*_report(record)`` reads the record's keys only (as written by ``to_record``); nothing is
 recomputed except the chi-square bounds the record's statistic is compared with.
@@ -12,6 +13,8 @@ import numpy as np
 from scipy import stats
 
 from oceanloc.errors import DataError
+from oceanloc.estimation.consistency import confidence_ellipse
+from oceanloc.geo.enu import EnuOrigin
 from oceanloc.report.html.model import Check, Circle, Estimate, MapLayers, Report, Series, Table
 
 ELLIPSE95_SCALE = math.sqrt(stats.chi2.ppf(0.95, 2))
@@ -368,6 +371,157 @@ def gnssa_report(rec: dict) -> Report:
             "Positions are offsets from the reference position, metres; ellipses from each survey's "
             "east and north sigmas (the record holds no east-north covariance)."
             + ("" if groups else " The record holds per-survey residual statistics, not per-ping residuals."),
+        ),
+    )
+
+
+def gnssa_array_report(rec: dict) -> Report:
+    """One GNSS-A survey of an array (``localize gnssa --format gnatss --json``): transponders with their
+    95 % ellipses, the array centre, residuals per ping, the sound-speed correction, iterations, checks.
+
+    The ellipses are the east-north blocks of ``details.covariance_m2`` (three rows and columns per
+    transponder, east, north, up, in the order of ``transponders``).
+    """
+    tps = rec["transponders"]
+    d = rec["details"]
+    cov = np.asarray(d["covariance_m2"], dtype=float).reshape(3 * len(tps), 3 * len(tps))
+    idx = np.arange(len(tps))[:, None] * 3 + np.arange(2)
+    en_cov = cov[idx[:, :, None], idx[:, None, :]]
+    en = np.array([[t["e_m"], t["n_m"]] for t in tps], dtype=float)
+    ell = confidence_ellipse(en, en_cov, 0.95)
+    estimates = tuple(
+        Estimate(
+            label=str(t["id"]),
+            east_m=float(en[i, 0]),
+            north_m=float(en[i, 1]),
+            semi_major_m=float(ell.semi_major_m[i]),
+            semi_minor_m=float(ell.semi_minor_m[i]),
+            angle_rad=float(ell.angle_rad[i]),
+            detail=f"U {t['u_m']:.3f} m, sd U {t['sigma_u_m']:.3f} m; {t['replies_used']} replies used",
+        )
+        for i, t in enumerate(tps)
+    )
+    c = rec["centre"]
+    o = rec["origin"]
+    layers = MapLayers(
+        sites_en_m=np.array([[c["e_m"], c["n_m"]]], dtype=float),
+        sites_label="array centre (estimated)",
+        sites_connect=False,
+        estimates=estimates,
+        origin=EnuOrigin(lat_deg=o["lat_deg"], lon_deg=o["lon_deg"], h_m=o["h_m"]),
+    )
+    series = [_ping_series("array", rec["pings"])]
+    if d.get("knot_times_s") and d.get("sound_speed_knots_mps"):
+        t_k = np.asarray(d["knot_times_s"], dtype=float)
+        v_k = np.asarray(d["sound_speed_knots_mps"], dtype=float)
+        sd_k = np.asarray(d.get("sound_speed_knot_sigma_mps") or np.full(t_k.size, np.nan), dtype=float)
+        series.append(
+            Series(
+                title="Sound speed at the knots of its correction over time",
+                x_label="time (s, as in the record)",
+                y_label="sound speed (m/s)",
+                lines=(
+                    (
+                        "sound speed at the knots",
+                        t_k,
+                        v_k,
+                        "lines+markers",
+                        [f"sd {s:.3f} m/s" for s in sd_k],
+                    ),
+                    ("knot + sd", t_k, v_k + sd_k, "lines", None),
+                    ("knot - sd", t_k, v_k - sd_k, "lines", None),
+                ),
+            )
+        )
+    used, excl = int(rec["replies"]) - int(rec["replies_excluded"]), int(rec["replies_excluded"])
+    checks = (
+        Check(
+            name="solver converged",
+            passed=bool(rec["converged"]),
+            value="yes" if rec["converged"] else "no",
+            detail=f"{len(rec['iterations'])} iterations, status {d.get('status', '?')}",
+        ),
+        Check(
+            name="replies used vs excluded: at most 5 % excluded",
+            passed=excl <= 0.05 * int(rec["replies"]),
+            value=f"{used} used, {excl} excluded",
+            bound=f"<= {0.05 * int(rec['replies']):.0f} excluded",
+            detail=f"of {rec['replies']} replies",
+        ),
+    )
+    keys = ("round", "replies_used", "sigma_path_m", "beta_m", "cost", "map_iterations", "position_change_m")
+    tables = (
+        Table(
+            title="Transponders",
+            header=(
+                "id",
+                "E (m)",
+                "N (m)",
+                "U (m)",
+                "sd E (m)",
+                "sd N (m)",
+                "sd U (m)",
+                "95% a x b (m)",
+                "replies used",
+            ),
+            rows=tuple(
+                (
+                    str(t["id"]),
+                    f"{t['e_m']:.4f}",
+                    f"{t['n_m']:.4f}",
+                    f"{t['u_m']:.4f}",
+                    f"{t['sigma_e_m']:.4f}",
+                    f"{t['sigma_n_m']:.4f}",
+                    f"{t['sigma_u_m']:.4f}",
+                    f"{e.semi_major_m:.4f} x {e.semi_minor_m:.4f}",
+                    str(t["replies_used"]),
+                )
+                for t, e in zip(tps, estimates, strict=True)
+            ),
+        ),
+        Table(
+            title="Iterations",
+            header=(
+                "iteration",
+                "round",
+                "replies used",
+                "sigma path (m)",
+                "beta (m)",
+                "cost",
+                "MAP iterations",
+                "position change (m)",
+                "excluded",
+            ),
+            rows=tuple(
+                (
+                    str(i + 1),
+                    *(_fmt(float(it[k])) if isinstance(it[k], float) else str(it[k]) for k in keys),
+                    str(it.get("excluded", "")),
+                )
+                for i, it in enumerate(rec["iterations"])
+            ),
+        ),
+    )
+    sc = d.get("centre_sigma_enu_m") or [float("nan")] * 3
+    return Report(
+        kind="gnssa-array",
+        title=f"GNSS-A array: {len(tps)} transponders ({rec.get('method', '?')}, {rec.get('solution', '?')})",
+        summary=(
+            f"survey epoch {d.get('epoch_utc', '?')}, file {d.get('file', '?')}",
+            f"array centre E {c['e_m']:.4f} m, N {c['n_m']:.4f} m, U {c['u_m']:.4f} m "
+            f"(sd {sc[0] * 100:.1f}, {sc[1] * 100:.1f}, {sc[2] * 100:.1f} cm)",
+            f"{used} of {rec['replies']} replies used; sound-speed correction "
+            f"{d.get('speed_correction_ppm', float('nan')):.1f} ppm; residual RMS "
+            f"{d.get('residual_rms_m', float('nan')):.4f} m",
+        ),
+        map=layers,
+        series=tuple(series),
+        tables=tables,
+        checks=checks,
+        provenance=rec.get("provenance", {}),
+        notes=(
+            "East-north about the record's origin (the array centre the survey was configured with), "
+            "metres; ellipses from the east-north blocks of the transponders' covariance.",
         ),
     )
 

@@ -1,8 +1,8 @@
 """Which kind of source a file is (SQLite journal or which JSON record), and its :class:`Report`.
 
 A survey journal is recognized by the SQLite header; a JSON record by its keys, with the provenance's
-command line as a tie-breaker (``simulate survey``, ``localize gnssa``, ``reproduce garcia2019``,
-``drift-plan``).
+command line as a tie-breaker (``simulate survey``, ``localize gnssa``, ``localize gnssa --format gnatss``,
+``reproduce garcia2019``, ``drift-plan``).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from oceanloc.report.html import records
 from oceanloc.report.html.model import Report
 
 SQLITE_HEADER = b"SQLite format 3\x00"
-KINDS = ("journal", "survey", "montecarlo", "gnssa", "reproduction", "drift")
+KINDS = ("journal", "survey", "montecarlo", "gnssa", "gnssa-array", "reproduction", "drift")
 
 
 def _json_kind(rec: dict) -> str | None:
@@ -26,6 +26,8 @@ def _json_kind(rec: dict) -> str | None:
         return "montecarlo"
     if "surveys" in rec and "spread" in rec:
         return "gnssa"
+    if "transponders" in rec and "centre" in rec and "pings" in rec and "details" in rec:
+        return "gnssa-array"
     if "checks" in rec and ("studies" in rec or "reproduce" in command):
         return "reproduction"
     if "result" in rec and "energy" in rec and "start_m" in rec:
@@ -56,7 +58,7 @@ def detect_kind(path: str | Path) -> tuple[str, dict | None]:
     if kind is None:
         raise DataError(
             f"{p}: a JSON file, but not a record oceanloc report knows (simulate survey, localize gnssa, "
-            "reproduce, drift-plan)"
+            "localize gnssa --format gnatss, reproduce, drift-plan)"
         )
     return kind, rec
 
@@ -76,6 +78,7 @@ def load_report(path: str | Path) -> Report:
             "survey": records.survey_report,
             "montecarlo": records.montecarlo_report,
             "gnssa": records.gnssa_report,
+            "gnssa-array": records.gnssa_array_report,
             "reproduction": records.reproduction_report,
         }[kind]
         return build(rec)
