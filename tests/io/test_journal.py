@@ -205,3 +205,22 @@ with Journal.open(sys.argv[1]) as j:
         whole = j.ranges()
     np.testing.assert_array_equal(whole[:, 0], 1.5e9 + 0.5 * np.arange(n))
     np.testing.assert_array_equal(whole[:, 2], 10.0 + 1e-5 * np.arange(n))
+
+
+def test_usbl_angles_and_events_are_journaled_and_bad_ones_refused(tmp_path):
+    with Journal.start(tmp_path / "j.db", {"planner": '"greedy"'}) as j:
+        assert j.add_usbl_range(1.8e9, 1, 120.5, 45.0, -30.0)
+        assert not j.add_usbl_range(1.8e9, 1, 120.5, 45.0, -30.0)  # stored already: nothing changed
+        assert j.add_usbl_range(1.8e9 + 1, 2, 80.0, None, None)  # a range-only modem: no angle row
+        np.testing.assert_array_equal(j.usbl_angles(), [[1.8e9, 1, 45.0, -30.0]])
+        assert j.range_at(1.8e9 + 1, 2) == 80.0
+        with pytest.raises(DataError, match=r"USBL elevation 400.0 deg not in \[-360, 360\]"):
+            j.add_usbl_range(1.8e9 + 2, 1, 10.0, 0.0, 400.0)
+        assert j.range_at(1.8e9 + 2, 1) is None
+        seqs = j.add_events(1.8e9, [("plan", {"x": 1.0}), ("command", {"gain": float("nan")})])
+        assert seqs == [1, 2]
+        assert [(e.kind, e.body) for e in j.events()] == [("plan", {"x": 1.0}), ("command", {"gain": None})]
+        assert j.last_event("plan").seq == 1 and j.last_event("link") is None
+        with pytest.raises(DataError, match="event kind 'arm' is not one of"):
+            j.add_event(1.8e9, "arm", {})
+        assert len(j.events()) == 2

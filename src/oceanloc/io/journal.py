@@ -38,6 +38,7 @@ import sqlite3
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -56,6 +57,8 @@ from oceanloc.io.qc import (
 )
 from oceanloc.io.records import to_jsonable
 from oceanloc.io.usbl import RangeLog
+
+T = TypeVar("T")
 
 FORMAT_KEY = "format"
 JOURNAL_FORMAT = "oceanloc-survey-journal 1"
@@ -439,15 +442,14 @@ class Journal:
                 )
         row = (float(t_unix_s), int(beacon), float(range_m))
         angles = (float(t_unix_s), int(beacon), azimuth_deg, elevation_deg)
-        try:
-            with self._db:
-                self._db.execute("BEGIN IMMEDIATE")
-                new = self._db.execute("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", row).rowcount == 1
-                if new and (azimuth_deg is not None or elevation_deg is not None):
-                    self._db.execute("INSERT OR IGNORE INTO usbl VALUES (?, ?, ?, ?)", angles)
-        except sqlite3.Error as exc:
-            raise JournalError(self._explain(exc, "cannot write to the journal")) from None
-        return new
+
+        def work(db: sqlite3.Connection) -> bool:
+            new = db.execute("INSERT OR IGNORE INTO ranges VALUES (?, ?, ?)", row).rowcount == 1
+            if new and (azimuth_deg is not None or elevation_deg is not None):
+                db.execute("INSERT OR IGNORE INTO usbl VALUES (?, ?, ?, ?)", angles)
+            return new
+
+        return self._transaction(work)
 
     def usbl_angles(self) -> FloatArray:
         """Stored USBL angles ordered by time and beacon, ``(u, 4)``: t, beacon, azimuth, elevation
@@ -470,21 +472,8 @@ class Journal:
             rows.append(
                 (float(t_unix_s), kind, json.dumps(to_jsonable(body), allow_nan=False, separators=(",", ":")))
             )
-        seqs = []
-        try:
-            with self._db:
-                self._db.execute("BEGIN IMMEDIATE")
-                for row in rows:
-                    seqs.append(
-                        int(
-                            self._db.execute(
-                                "INSERT INTO events (t, kind, body) VALUES (?, ?, ?)", row
-                            ).lastrowid
-                        )
-                    )
-        except sqlite3.Error as exc:
-            raise JournalError(self._explain(exc, "cannot write to the journal")) from None
-        return seqs
+        sql = "INSERT INTO events (t, kind, body) VALUES (?, ?, ?)"
+        return self._transaction(lambda db: [int(db.execute(sql, row).lastrowid) for row in rows])
 
     def events(self, kind: str | None = None, *, after_seq: int = 0) -> list[JournalEvent]:
         """Journaled events in order, of one kind or all, numbered above ``after_seq``."""
@@ -533,7 +522,11 @@ class Journal:
         return self._write("INSERT OR IGNORE INTO headings VALUES (?, ?, ?)", [row]) == 1
 
     def _write(self, sql: str, rows: list[tuple]) -> int:
-        """Run one statement over ``rows`` in one transaction; returns the rows changed.
+        """Run one statement over ``rows`` in one transaction; returns the rows changed."""
+        return self._transaction(lambda db: db.executemany(sql, rows).rowcount)
+
+    def _transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
+        """Run ``work(connection)`` in one write transaction and return what it returns.
 
         SQLite failures (journal locked by another writer past the timeout, disk full, read-only file)
         are :class:`DataError` naming the journal; the transaction is rolled back, nothing committed is
@@ -542,14 +535,13 @@ class Journal:
         try:
             with self._db:
                 self._db.execute("BEGIN IMMEDIATE")
-                cur = self._db.executemany(sql, rows)
+                return work(self._db)
         except sqlite3.Error as exc:
             if self.read_only:
                 raise JournalError(
                     f"{self.path}: the journal is read-only here: {self._read_only_reason()}"
                 ) from None
             raise JournalError(self._explain(exc, "cannot write to the journal")) from None
-        return cur.rowcount
 
     def fix_at(self, t_unix_s: float) -> tuple[float, float, float] | None:
         """The stored fix (lat, lon, h) at that time, if any."""
