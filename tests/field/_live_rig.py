@@ -30,6 +30,7 @@ import pynmea2
 import pytest
 
 from oceanloc.geo.projection import LocalProjection
+from oceanloc.models.measurements import range_jacobian
 from oceanloc.sim.boat import BoatParams, BoatSimulator
 from oceanloc.sim.seatrac_beacon import BeaconSimConfig, SeatracBeaconSimulator
 
@@ -369,8 +370,7 @@ def range_information(
     """log det of the Fisher information of a point from ranges at ``sensors`` (m, 3), at the truth,
     with the survey's Gaussian prior: sum of h h^T / sigma^2 over the unit lines of sight, plus
     diag(1 / prior_sigma^2) (Garcia et al. 2019, eq. 24)."""
-    d = target_enu_m[None, :] - sensors_enu_m
-    h = d / np.linalg.norm(d, axis=1, keepdims=True)
+    h = range_jacobian(target_enu_m[None, :], sensors_enu_m)
     info = h.T @ h / sigma_m**2 + np.diag(1.0 / np.square(prior_sigma_m))
     return float(np.linalg.slogdet(info)[1])
 
