@@ -14,17 +14,26 @@ in one go or by a process that was killed and re-run.
   random baseline. The yaw-rate planners need the vehicle's heading: the latest HDT heading if one was
   recorded since the previous fix, else the course between the last two fixes, else the heading given
   at the start.
+
+``survey status`` and ``survey next`` read the estimates stored in the journal when the journal's
+records are those they were computed from (:func:`stored_survey_estimates`: the journal's
+:meth:`~oceanloc.io.journal.Journal.fingerprint`, the settings and the version key them), and compute and
+store them otherwise; ``survey add`` stores them after adding. Stored or computed, they are the same
+numbers to the bit (tested).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import io
+import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from oceanloc import __version__
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
@@ -36,7 +45,14 @@ from oceanloc.estimation.consistency import (
 )
 from oceanloc.estimation.range_logs import localize_beacons, prior_mean
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
-from oceanloc.io.journal import AppendCounts, Journal, JournalRecords, append_gps_log, append_range_log
+from oceanloc.io.journal import (
+    AppendCounts,
+    Journal,
+    JournalRecords,
+    RecordSummary,
+    append_gps_log,
+    append_range_log,
+)
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges, align_ranges, format_utc, read_usbl
@@ -411,11 +427,14 @@ def _linearization(
     )
 
 
-def vehicle_yaw(records: JournalRecords, settings: JournalSettings) -> tuple[float, str]:
+def vehicle_yaw(
+    records: JournalRecords, settings: JournalSettings, origin: EnuOrigin | None = None
+) -> tuple[float, str]:
     """The vehicle's heading for planning, radians counter-clockwise from east, and its source.
 
     The latest HDT heading if it was recorded at or after the previous fix (``HDT``); else the course
-    between the last two fixes if they are apart (``fixes``); else the start setting (``start``).
+    between the last two fixes if they are apart (``fixes``, in the survey's ENU frame ``origin``,
+    default :func:`survey_origin` of ``records``); else the start setting (``start``).
 
     Raises
     ------
@@ -428,7 +447,7 @@ def vehicle_yaw(records: JournalRecords, settings: JournalSettings) -> tuple[flo
         if records.heading_t_unix_s[-1] >= t_prev:
             return _true_heading_to_yaw(float(records.heading_deg[-1])), "HDT"
     if n >= 2:
-        origin = survey_origin(records, settings)
+        origin = survey_origin(records, settings) if origin is None else origin
         last = geodetic_to_enu(records.lat_deg[-2:], records.lon_deg[-2:], records.h_m[-2:], origin)
         step = last[1] - last[0]
         if np.hypot(step[0], step[1]) > _MIN_COURSE_STEP_M:
@@ -473,7 +492,7 @@ def next_waypoint(
         )
     kind = settings.planner.kind
     if kind in ("lookahead", "random-yaw"):
-        yaw, source = vehicle_yaw(records, settings)
+        yaw, source = vehicle_yaw(records, settings, est.origin)
     else:
         yaw, source = 0.0, "unused"
     start = est.track_enu_m[-1]
@@ -613,7 +632,8 @@ def add_to_journal(
     journal: files in transactions of :data:`~oceanloc.io.journal.APPEND_CHUNK` records in file order (a
     killed process leaves a prefix of the files committed), ``fixes``/``manual_ranges`` one transaction
     per record. Everything is read and checked before the first write, so an error leaves the journal as
-    it was; records already stored change nothing.
+    it was; records already stored change nothing. Then the estimates of the journal's records are
+    computed and stored in it (:func:`stored_survey_estimates`), for ``survey status`` and ``next``.
 
     Raises
     ------
@@ -655,6 +675,8 @@ def add_to_journal(
             counts = _add_manual(manual_ranges, j.add_range, same_range, "ranges", conflicts)
             sources.append(("--range", str(counts)))
         n = {table: j.count_valid(table) for table in ("fixes", "headings", "ranges")}
+        if n["fixes"]:  # for the next `survey status` / `survey next` (a cache: never blocks the add)
+            stored_survey_estimates(j, settings)
     return JournalAddition(
         sources=tuple(sources), conflicts=tuple(conflicts), qc=qc, n_fixes=n["fixes"],
         n_headings=n["headings"], n_ranges=n["ranges"],
@@ -687,7 +709,7 @@ class JournalStatus:
 
     path: str
     settings: JournalSettings
-    records: JournalRecords
+    records: RecordSummary
     estimates: SurveyEstimates | None
 
     def to_record(self) -> dict:
@@ -701,20 +723,111 @@ class JournalStatus:
         return base | (self.estimates.to_record() if self.estimates is not None else {"beacons": []})
 
 
+ESTIMATES_NAME = "survey-estimates"
+"""Name under which the journal keeps its estimates (:meth:`~oceanloc.io.journal.Journal.derived`)."""
+
+_ESTIMATES_REVISION = 1
+"""Bumped when :func:`survey_estimates` changes its numbers, so estimates stored before are recomputed."""
+
+
+def _estimates_key(journal: Journal, fingerprint: str | None = None) -> str:
+    """What stored estimates must have been computed from: this version of the estimator, the journal's
+    settings and its records (:meth:`~oceanloc.io.journal.Journal.fingerprint`, read here unless
+    given)."""
+    meta = json.dumps(journal.meta(), sort_keys=True)
+    fingerprint = journal.fingerprint() if fingerprint is None else fingerprint
+    return f"oceanloc {__version__} r{_ESTIMATES_REVISION}|{meta}|{fingerprint}"
+
+
+def pack_estimates(est: SurveyEstimates) -> bytes:
+    """:class:`SurveyEstimates` as bytes (an ``.npz`` archive, no pickles; every number exact)."""
+    o, e = est.origin, est.ellipses
+    arrays = {
+        "origin": np.array([o.lat_deg, o.lon_deg, o.h_m]),
+        "ellipse_center_m": e.center_m,
+        "ellipse_semi_major_m": e.semi_major_m,
+        "ellipse_semi_minor_m": e.semi_minor_m,
+        "ellipse_angle_rad": e.angle_rad,
+        "ellipse_confidence": np.array(e.confidence),
+        "trust_messages": np.array(est.trust_messages, dtype=str),
+    }
+    for f in dataclasses.fields(est):
+        if f.name not in ("origin", "ellipses", "trust_messages"):
+            arrays[f.name] = getattr(est, f.name)
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def unpack_estimates(payload: bytes) -> SurveyEstimates:
+    """The inverse of :func:`pack_estimates`."""
+    with np.load(io.BytesIO(payload), allow_pickle=False) as z:
+        a = {k: z[k] for k in z.files}
+    lat, lon, h = (float(v) for v in a.pop("origin"))
+    ellipses = ConfidenceEllipse(
+        center_m=a.pop("ellipse_center_m"),
+        semi_major_m=a.pop("ellipse_semi_major_m"),
+        semi_minor_m=a.pop("ellipse_semi_minor_m"),
+        angle_rad=a.pop("ellipse_angle_rad"),
+        confidence=float(a.pop("ellipse_confidence")),
+    )
+    messages = tuple(str(m) for m in a.pop("trust_messages"))
+    return SurveyEstimates(
+        origin=EnuOrigin(lat_deg=lat, lon_deg=lon, h_m=h), ellipses=ellipses, trust_messages=messages, **a
+    )
+
+
+def stored_survey_estimates(
+    journal: Journal,
+    settings: JournalSettings,
+    records: JournalRecords | None = None,
+    *,
+    fingerprint: str | None = None,
+) -> SurveyEstimates:
+    """:func:`survey_estimates` of the journal's records: the stored ones if the records are those they
+    were computed from, else computed (from ``records`` when given: the journal's, read by the caller;
+    else read here without warning of invalid rows, which :meth:`~oceanloc.io.journal.Journal.summary`
+    reports) and stored for the next reader, where the journal can be written without waiting.
+    ``fingerprint``: the journal's, if just read (:attr:`~oceanloc.io.journal.RecordSummary.fingerprint`).
+
+    Raises
+    ------
+    DataError
+        If the journal holds no GPS fix yet.
+    """
+    key = _estimates_key(journal, fingerprint)
+    payload = journal.derived(ESTIMATES_NAME, key)
+    if payload is not None:
+        return unpack_estimates(payload)
+    rec = journal.records(headings=False, warn=False) if records is None else records
+    est = survey_estimates(rec, settings)
+    journal.store_derived(ESTIMATES_NAME, key, pack_estimates(est))
+    return est
+
+
 def journal_status(path: str | Path) -> JournalStatus:
-    """Read a journal and estimate its beacons (``survey status``; the headings are counted, and only the
-    latest read)."""
+    """A journal's settings, counts and estimates (``survey status``): the records are counted by SQL
+    and the estimates read from the journal where they are stored for its current records
+    (:func:`stored_survey_estimates`)."""
     with Journal.open(path) as j:
         settings = JournalSettings.from_meta(j.meta(), str(path))
-        rec = j.records(headings=False)
-    est = survey_estimates(rec, settings) if rec.n_fixes else None
-    return JournalStatus(path=str(path), settings=settings, records=rec, estimates=est)
+        summary = j.summary()
+        est = (
+            stored_survey_estimates(j, settings, fingerprint=summary.fingerprint) if summary.n_fixes else None
+        )
+    return JournalStatus(path=str(path), settings=settings, records=summary, estimates=est)
 
 
 def journal_next_waypoint(path: str | Path, *, seed: int = 0) -> Waypoint:
-    """The next waypoint of a journal's survey (``survey next``); the random planners draw from a
-    generator seeded by ``seed`` and the record counts, so a re-run on the same journal repeats."""
+    """The next waypoint of a journal's survey (``survey next``): the planner from the last fix with the
+    estimates of :func:`stored_survey_estimates`. The random planners draw from a generator seeded by
+    ``seed`` and the record counts, so a re-run on the same journal repeats."""
     with Journal.open(path) as j:
         settings = JournalSettings.from_meta(j.meta(), str(path))
-        rec = j.records(headings=False)
-    return next_waypoint(rec, settings, rng=np.random.default_rng([seed, rec.n_fixes, rec.n_ranges]))
+        summary = j.summary()
+        if summary.n_fixes == 0:
+            raise DataError("no GPS fix in the journal yet: nothing to estimate")
+        est = stored_survey_estimates(j, settings, fingerprint=summary.fingerprint)
+        tail = j.tail()
+    rng = np.random.default_rng([seed, summary.n_fixes, summary.n_ranges])
+    return next_waypoint(tail, settings, estimates=est, rng=rng)

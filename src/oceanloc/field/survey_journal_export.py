@@ -14,11 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
+from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.field.survey_journal import ELLIPSE_CONFIDENCE, RANGE_STATUS, SurveyEstimates, journal_status
+from oceanloc.field.survey_journal import (
+    ELLIPSE_CONFIDENCE,
+    RANGE_STATUS,
+    SurveyEstimates,
+    stored_survey_estimates,
+)
 from oceanloc.io.csv_tables import write_csv
 from oceanloc.io.geojson import line_feature, point_feature, polygon_feature, write_geojson
-from oceanloc.io.journal import JournalRecords
+from oceanloc.io.journal import Journal, JournalRecords
 from oceanloc.io.usbl import format_utc
 
 CSV_FILES: tuple[str, ...] = ("fixes.csv", "headings.csv", "ranges.csv", "estimates.csv")
@@ -164,10 +170,12 @@ def export_journal(
     """
     if geojson is None and csv is None:
         raise ConfigError("nothing to export: give --geojson PATH and/or --csv DIR")
-    status = journal_status(path)
-    if status.estimates is None:
-        raise DataError("no GPS fix in the journal yet: nothing to export")
-    rec, est = status.records, status.estimates
+    with Journal.open(path) as j:
+        settings = JournalSettings.from_meta(j.meta(), str(path))
+        rec = j.records(headings=False)
+        if rec.n_fixes == 0:
+            raise DataError("no GPS fix in the journal yet: nothing to export")
+        est = stored_survey_estimates(j, settings, rec)
     return JournalExport(
         geojson=None if geojson is None else export_geojson(geojson, rec, est),
         csv=() if csv is None else tuple(export_csv(csv, rec, est)),

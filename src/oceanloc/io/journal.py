@@ -25,6 +25,12 @@ the journal: damaged pages, a read-only folder, a lock held past the timeout.
 A live survey (``oceanloc survey run``) also keeps the USBL angles of each range (table ``usbl``, written
 in the range's transaction) and its *events* (table ``events``: each epoch's estimate, plan and command
 sent, link states, start and stop, as JSON), so a survey can be audited and replayed afterwards.
+
+Results derived from the records can be kept beside them (table ``derived``: :meth:`Journal.store_derived`,
+:meth:`Journal.derived`), each under the :meth:`Journal.fingerprint` of the records it was computed
+from, so a reader that finds the same fingerprint can use the stored result instead of recomputing it
+(``survey status`` on a 24-hour journal), and one that finds another recomputes. It is a cache: losing it
+loses nothing, and no record depends on it.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ import logging
 import math
 import os
 import sqlite3
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -73,7 +80,7 @@ HEADING_RANGE_DEG: tuple[float, float] = (0.0, 360.0)
 """True headings the journal stores, degrees clockwise from north."""
 
 _SQLITE_MAGIC = b"SQLite format 3\x00"
-_TABLES = {"meta", "fixes", "ranges", "headings", "usbl", "events"}
+_TABLES = {"meta", "fixes", "ranges", "headings", "usbl", "events", "derived"}
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS fixes (t REAL PRIMARY KEY, lat REAL NOT NULL, lon REAL NOT NULL, h REAL NOT NULL);
@@ -85,6 +92,8 @@ CREATE TABLE IF NOT EXISTS usbl (t REAL NOT NULL, beacon INTEGER NOT NULL, azimu
                                  elevation_deg REAL, PRIMARY KEY (t, beacon));
 CREATE TABLE IF NOT EXISTS events (seq INTEGER PRIMARY KEY, t REAL NOT NULL, kind TEXT NOT NULL,
                                    body TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS derived (name TEXT PRIMARY KEY, fingerprint TEXT NOT NULL, t REAL NOT NULL,
+                                    payload BLOB NOT NULL);
 """
 
 EVENT_KINDS: tuple[str, ...] = ("start", "estimate", "plan", "command", "link", "stop")
@@ -191,6 +200,34 @@ _ORDER = {"fixes": "t", "ranges": "t, beacon", "headings": "t, seq"}
 _PROBLEM = {"fixes": fix_problem, "ranges": range_problem, "headings": heading_problem}
 
 
+_FINGERPRINT_SQL = {
+    "fixes": "count(*), max(rowid), total(t), total(lat), total(lon), total(h), total(rowid * t), "
+    "total(rowid * (lat + lon + h))",
+    "ranges": "count(*), max(rowid), total(t), total(beacon), total(range_m), total(rowid * t), "
+    "total(rowid * (beacon + range_m))",
+}
+"""Aggregates of the valid fixes and ranges that :meth:`Journal.fingerprint` is made of: counts, the last
+row id, sums of every column and a row-id-weighted sum (so a value moved between records changes it)."""
+
+
+def _fingerprint(*parts: tuple) -> str:
+    return json.dumps([[v if v is None else repr(v) for v in part] for part in parts])
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RecordSummary:
+    """Counts of a journal's valid records, the time span of its fixes (UTC Unix seconds; NaN with no
+    fix) and its :meth:`Journal.fingerprint`, read by SQL without reading the records
+    (``survey status``)."""
+
+    n_fixes: int
+    n_headings: int
+    n_ranges: int
+    first_fix_t_unix_s: float
+    last_fix_t_unix_s: float
+    fingerprint: str
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class JournalEvent:
     """One journaled live-survey event: its number, Unix time (s), kind and JSON body."""
@@ -247,6 +284,7 @@ class Journal:
 
     def __init__(self, path: str | Path, *, create: bool = True, timeout_s: float = 30.0) -> None:
         self.path = Path(path)
+        self._timeout_s = timeout_s
         if not create and not self.path.is_file():
             raise DataError(f"{self.path}: no survey journal here (start one with `oceanloc survey start`)")
         if create and not self.path.parent.is_dir():
@@ -633,7 +671,7 @@ class Journal:
         problems = [] if pages == ["ok"] else [f"{self.path}: damaged: {p}" for p in pages]
         return problems + [f"{self.path}: {r}" for r in self.invalid_records()]
 
-    def records(self, *, headings: bool = True) -> JournalRecords:
+    def records(self, *, headings: bool = True, warn: bool = True) -> JournalRecords:
         """Every valid record, read in one read transaction (a consistent snapshot).
 
         Invalid stored rows (see :meth:`invalid_records`) are skipped, listed in
@@ -643,7 +681,8 @@ class Journal:
 
         With ``headings=False`` only the headings recorded since the second-to-last fix are read (all
         that :func:`~oceanloc.field.survey_journal.vehicle_yaw` looks at);
-        :attr:`JournalRecords.n_headings` is still the journal's count.
+        :attr:`JournalRecords.n_headings` is still the journal's count. ``warn=False``: no warning (the
+        caller has reported the invalid rows, e.g. through :meth:`summary`).
         """
         try:
             with self._db:
@@ -660,15 +699,8 @@ class Journal:
                 invalid = self.invalid_records(bad)
         except sqlite3.Error as exc:
             raise JournalError(self._explain(exc, "cannot read the journal")) from None
-        if invalid:
-            _LOG.warning(
-                "%s: %d invalid record(s) skipped (first: %s); `oceanloc survey check %s` lists "
-                "them, with --remove-invalid it deletes them",
-                self.path,
-                len(invalid),
-                invalid[0],
-                self.path,
-            )
+        if warn:
+            self._warn_invalid(invalid)
         return JournalRecords(
             fix_t_unix_s=fixes[:, 0],
             lat_deg=fixes[:, 1],
@@ -682,6 +714,122 @@ class Journal:
             invalid=tuple(str(r) for r in invalid),
             heading_count=None if headings else n_head,
         )
+
+    def _warn_invalid(self, invalid: list[InvalidRecord]) -> None:
+        """Report skipped invalid records once, as a logged warning."""
+        if invalid:
+            _LOG.warning(
+                "%s: %d invalid record(s) skipped (first: %s); `oceanloc survey check %s` lists "
+                "them, with --remove-invalid it deletes them",
+                self.path,
+                len(invalid),
+                invalid[0],
+                self.path,
+            )
+
+    def summary(self) -> RecordSummary:
+        """The valid records' counts, the fixes' time span and the :meth:`fingerprint`, in one read
+        transaction (one scan of each table); invalid stored rows are reported as :meth:`records`
+        reports them."""
+        tables = ("fixes", "headings", "ranges")
+        try:
+            with self._db:
+                self._db.execute("BEGIN")
+                fixes, ranges = (self._fingerprint_row(t) for t in ("fixes", "ranges"))
+                n = {
+                    "fixes": int(fixes[0]),
+                    "headings": self.count_valid("headings"),
+                    "ranges": int(ranges[0]),
+                }
+                invalid = self.invalid_records(tuple(t for t in tables if self.count(t) != n[t]))
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        self._warn_invalid(invalid)
+        first, last = (math.nan if v is None else float(v) for v in fixes[-2:])
+        return RecordSummary(
+            n_fixes=n["fixes"], n_headings=n["headings"], n_ranges=n["ranges"], first_fix_t_unix_s=first,
+            last_fix_t_unix_s=last, fingerprint=_fingerprint(fixes[:-2], ranges),
+        )  # fmt: skip
+
+    def _fingerprint_row(self, table: str) -> tuple:
+        """:data:`_FINGERPRINT_SQL` of a table's valid rows (fixes: then the first and last time)."""
+        extra = ", min(t), max(t)" if table == "fixes" else ""
+        sql = f"SELECT {_FINGERPRINT_SQL[table]}{extra} FROM {table} WHERE IFNULL({_VALID_SQL[table]}, 0)"
+        return self._query(sql)[0]
+
+    def tail(self, fixes: int = 2) -> JournalRecords:
+        """The last ``fixes`` valid fixes and the valid headings recorded since the first of them, no
+        ranges: what the planner's start and heading need
+        (:func:`~oceanloc.field.survey_journal.vehicle_yaw`), read without reading the whole journal;
+        ``heading_count`` is the journal's count."""
+        cond = f"IFNULL({_VALID_SQL['fixes']}, 0)"
+        try:
+            with self._db:
+                self._db.execute("BEGIN")
+                rows = self._query(
+                    f"SELECT t, lat, lon, h FROM fixes WHERE {cond} ORDER BY t DESC LIMIT ?", (fixes,)
+                )
+                last = np.array(rows[::-1], dtype=float).reshape(-1, 4)
+                heads = (
+                    self._valid("headings", f"t >= {float(last[0, 0])!r}")
+                    if last.shape[0]
+                    else np.zeros((0, 3))
+                )
+                n_head = self.count_valid("headings")
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        empty = np.zeros(0)
+        return JournalRecords(
+            fix_t_unix_s=last[:, 0], lat_deg=last[:, 1], lon_deg=last[:, 2], h_m=last[:, 3],
+            range_t_unix_s=empty, beacon=np.zeros(0, dtype=np.int64), range_m=empty,
+            heading_t_unix_s=heads[:, 0], heading_deg=heads[:, 2], heading_count=n_head,
+        )  # fmt: skip
+
+    def fingerprint(self) -> str:
+        """A fingerprint of the valid fixes and ranges (not the headings, events or derived results):
+        it changes when a fix or range is added, removed or altered (SQL aggregates,
+        :data:`_FINGERPRINT_SQL`; a scan of each table, no rows read into Python). Also in
+        :meth:`summary`."""
+        try:
+            with self._db:
+                self._db.execute("BEGIN")
+                fixes, ranges = (self._fingerprint_row(t) for t in ("fixes", "ranges"))
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        return _fingerprint(fixes[:-2], ranges)
+
+    def derived(self, name: str, fingerprint: str) -> bytes | None:
+        """The result stored under ``name`` if it was computed from records with this fingerprint, else
+        None (also for a journal written before results were stored)."""
+        try:
+            rows = self._db.execute(
+                "SELECT payload FROM derived WHERE name = ? AND fingerprint = ?", (name, fingerprint)
+            ).fetchall()
+        except sqlite3.OperationalError:  # no such table: an older journal opened read-only
+            return None
+        except sqlite3.Error as exc:
+            raise JournalError(self._explain(exc, "cannot read the journal")) from None
+        return bytes(rows[0][0]) if rows else None
+
+    def store_derived(self, name: str, fingerprint: str, payload: bytes, *, timeout_s: float = 0.5) -> bool:
+        """Keep a derived result (replacing the one of that name); False, and nothing written, if the
+        journal is read-only or another writer holds it past ``timeout_s`` (a cache never waits long, so a
+        reader never delays a live survey's writes)."""
+        if self.read_only:
+            return False
+        try:
+            self._db.execute(f"PRAGMA busy_timeout = {int(1e3 * timeout_s)}")
+            with self._db:
+                self._db.execute("BEGIN IMMEDIATE")
+                self._db.execute(
+                    "INSERT OR REPLACE INTO derived VALUES (?, ?, ?, ?)",
+                    (name, fingerprint, time.time(), sqlite3.Binary(payload)),
+                )
+            return True
+        except sqlite3.Error:
+            return False
+        finally:
+            self._db.execute(f"PRAGMA busy_timeout = {int(1e3 * self._timeout_s)}")
 
     def count_valid(self, table: str) -> int:
         """Valid rows in ``fixes``, ``headings`` or ``ranges`` (counted by SQL, checks as on the way in)."""

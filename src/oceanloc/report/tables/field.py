@@ -250,7 +250,7 @@ def journal_status_lines(st: JournalStatus) -> list[str]:
     """``survey status``: the journal, its settings, and its records' counts and time span."""
     rec = st.records
     span = (
-        f", {format_utc(float(rec.fix_t_unix_s[0]))} to {format_utc(float(rec.fix_t_unix_s[-1]))}"
+        f", {format_utc(rec.first_fix_t_unix_s)} to {format_utc(rec.last_fix_t_unix_s)}"
         if rec.n_fixes
         else ""
     )
