@@ -23,7 +23,7 @@ from oceanloc.field.survey_journal import add_to_journal, journal_next_waypoint,
 from oceanloc.field.survey_journal_check import check_journal, journal_invalid_records
 from oceanloc.io.journal import Journal, fix_problem, range_problem
 from oceanloc.planning.site_planners import parse_site_planner
-from oceanloc.report.tables import field as tables
+from oceanloc.report.tables import survey_journal as tables
 from oceanloc.units import DEG
 
 app = typer.Typer(

@@ -8,6 +8,7 @@ from oceanloc.estimation.gnssa import GnssaOptions
 from oceanloc.field.gnssa_surveys import process_gnssa_surveys
 from oceanloc.io.gnssa import lajolla_paths
 from oceanloc.report.tables import field as tables
+from oceanloc.report.tables import survey_journal as journal_tables
 
 
 def _render(table) -> str:
@@ -87,13 +88,13 @@ def test_journal_estimates_table_shows_the_trust_column(tmp_path):
         records = j.records()
     est = survey_estimates(records, settings)
     untrusted = dataclasses.replace(est, trusted=np.array([True, False]), trust_messages=("ok", "bent"))
-    text = _render(tables.journal_estimates_table(untrusted))
+    text = _render(journal_tables.journal_estimates_table(untrusted))
     rows = [line for line in text.splitlines() if line.strip().startswith(("1 ", "2 "))]
     assert "!" not in rows[0] and rows[1].count("!") == 1 and "not trusted" in text
     assert all(len(line) <= 100 for line in text.splitlines())
-    lines = tables.journal_range_lines(untrusted)
+    lines = journal_tables.journal_range_lines(untrusted)
     assert any(line.startswith("beacon 2: bent (linearity ") for line in lines)
-    assert not any("bent" in line or "ok" in line for line in tables.journal_range_lines(est))
+    assert not any("bent" in line or "ok" in line for line in journal_tables.journal_range_lines(est))
 
 
 def test_waypoint_line_names_beacons_whose_ellipse_is_not_trusted():
@@ -118,9 +119,9 @@ def test_waypoint_line_names_beacons_whose_ellipse_is_not_trusted():
         beacons=np.array([1, 2]),
         status=PlanStatus.EXACT,
     )
-    assert "not trusted" not in tables.waypoint_line(w)
+    assert "not trusted" not in journal_tables.waypoint_line(w)
     flagged = dataclasses.replace(w, untrusted_beacons=np.array([2]))
-    assert tables.waypoint_line(flagged).endswith(
+    assert journal_tables.waypoint_line(flagged).endswith(
         "(ellipse of beacon 2 not trusted yet: planned on its linearized covariance)"
     )
     assert flagged.to_record()["untrusted_beacons"] == [2]

@@ -8,7 +8,7 @@ import numpy as np
 from rich.markup import escape
 
 from oceanloc.field.live_survey import Epoch, LiveSurveyResult, Notice
-from oceanloc.report.tables.field import journal_estimates_table
+from oceanloc.report.tables.survey_journal import journal_estimates_table
 
 
 def _clock(t_unix_s: float) -> str:
