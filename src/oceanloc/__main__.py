@@ -1,5 +1,5 @@
 """``python -m oceanloc``: the same command line as the ``oceanloc`` script."""
 
-from oceanloc.cli.app import main
+from oceanloc.cli.main import main
 
 main()

@@ -1,64 +1,20 @@
-"""The ``oceanloc`` console script: the root app with every command registered, and error handling.
+"""The root ``oceanloc`` app with every command registered (for in-process use: tests, notebooks), and
+the console script's :func:`~oceanloc.cli.main.main`.
 
 The CLI is a thin shell over the library: command modules only parse options, call library functions
-and print or write their results. User errors (:class:`oceanloc.errors.OceanlocError`) end with a
-one-line message and exit status 2, never a traceback.
+and print or write their results. The console script itself (:mod:`oceanloc.cli.main`) imports only the
+modules of the command it runs.
 """
 
 from __future__ import annotations
 
-import sys
-
-import click
-import typer
-
-from oceanloc.cli import commands  # noqa: F401  (registers every command)
-from oceanloc.cli._common import err_console, escape
+from oceanloc.cli import commands
+from oceanloc.cli.main import main
 from oceanloc.cli.root import app
-from oceanloc.errors import OceanlocError
+
+commands.load()
 
 __all__ = ["app", "main"]
-
-try:  # typer >= 0.20 carries its own copy of click; older ones raise click's exceptions
-    from typer._click import exceptions as _typer_click
-except ImportError:  # pragma: no cover - depends on the installed typer
-    _typer_click = click.exceptions
-
-
-def _classes(name: str) -> tuple[type[BaseException], ...]:
-    """The exception class ``name`` of click, of typer's copy of click and of typer, where each has it."""
-    found = (getattr(m, name, None) for m in (click.exceptions, _typer_click, typer))
-    return tuple(dict.fromkeys(c for c in found if isinstance(c, type)))
-
-
-_EXIT = _classes("Exit")
-_ABORT = _classes("Abort")
-_NO_ARGS = _classes("NoArgsIsHelpError")
-_CLICK_ERRORS = _classes("ClickException")
-
-
-def main(argv: list[str] | None = None) -> None:
-    """Console-script entry point."""
-    try:
-        app(args=argv, standalone_mode=False, prog_name="oceanloc")
-    except _EXIT as exc:
-        sys.exit(exc.exit_code)
-    except _ABORT:
-        err_console.print("aborted")
-        sys.exit(130)
-    except _NO_ARGS as exc:
-        exc.show()
-        sys.exit(2)
-    except _CLICK_ERRORS as exc:
-        exc.show()
-        sys.exit(2 if exc.exit_code == 1 else exc.exit_code)
-    except OceanlocError as exc:
-        err_console.print(f"[bold red]error:[/bold red] {escape(str(exc))}", highlight=False, soft_wrap=True)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        err_console.print("interrupted")
-        sys.exit(130)
-
 
 if __name__ == "__main__":
     main()

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from oceanloc.cli import root
 from oceanloc.cli._common import (
     FiguresOut,
     JsonOut,
@@ -35,6 +36,7 @@ app = typer.Typer(
     "(nearest recorded location to its planned point, PLANS eq. 31), over a Monte Carlo of prior draws.",
     no_args_is_help=True,
 )
+root.app.add_typer(app, name="replay")
 
 _READINGS = (
     "Readings: eq. (31) picks the unused record nearest (horizontally) to the planned point among those "

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import typer
 
+from oceanloc.cli import root
+
 app = typer.Typer(
     help="Reproduce the papers' tables and figures, with the published values beside ours.",
     no_args_is_help=True,
 )
+root.app.add_typer(app, name="reproduce")

@@ -1,7 +1,9 @@
 """The root ``oceanloc`` Typer app and its command groups.
 
 Command modules register their commands here (``@root.app.command(...)``) or on a group
-(``@reproduce.app.command(...)``); :mod:`oceanloc.cli.commands` imports them all.
+(``@reproduce.app.command(...)``), and each group module adds its group to this app; which module
+registers which command is :data:`oceanloc.cli.commands.COMMAND_MODULES`. Nothing here imports a
+command module, so the command line starts by importing only the modules of the command it runs.
 """
 
 from __future__ import annotations
@@ -9,8 +11,6 @@ from __future__ import annotations
 import typer
 
 from oceanloc import __version__
-from oceanloc.cli import replay, reproduce, simulate
-from oceanloc.cli import scenarios as scenarios_cmd
 
 app = typer.Typer(
     name="oceanloc",
@@ -19,10 +19,6 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     add_completion=False,
 )
-app.add_typer(scenarios_cmd.app, name="scenarios")
-app.add_typer(replay.app, name="replay")
-app.add_typer(reproduce.app, name="reproduce")
-app.add_typer(simulate.app, name="simulate")
 
 
 def _version(value: bool) -> None:

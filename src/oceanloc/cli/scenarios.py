@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import typer
 
+from oceanloc.cli import root
 from oceanloc.cli._common import console
 from oceanloc.config.catalog import builtin_scenarios, load_scenario
 from oceanloc.report.tables.scenarios import scenario_list_table, scenario_show_table
 
 app = typer.Typer(help="List and show built-in scenarios (survey, flock, drift).", no_args_is_help=True)
+root.app.add_typer(app, name="scenarios")
 
 
 @app.command("list")

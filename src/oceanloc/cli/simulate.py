@@ -4,4 +4,7 @@ from __future__ import annotations
 
 import typer
 
+from oceanloc.cli import root
+
 app = typer.Typer(help="Simulate surveys and data.", no_args_is_help=True)
+root.app.add_typer(app, name="simulate")
