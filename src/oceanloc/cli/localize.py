@@ -47,7 +47,7 @@ def gnssa(
         typer.Option(
             "--format",
             help="Input format: 'lajolla' (one transponder, the Wave Glider column files) or 'gnatss' (a "
-            "GNATSS configuration with pxp_tt + POS_FREED_TRANS_TWTT or its Level-2 CSV).",
+            "GNATSS configuration with pxp_tt + POS_FREED_TRANS_TWTT, pxp_tt + --antenna, or a Level-2 CSV).",
         ),
     ] = "lajolla",
     pxp_tt: Annotated[Path | None, typer.Option("--pxp-tt", help="gnatss: pxp_tt travel times (us).")] = None,

@@ -1,7 +1,10 @@
 """GNSS-A array surveys in GNATSS's formats: read them, solve them (oceanloc's way or GNATSS's), report.
 
 :func:`load_gnatss_input` reads a GNATSS configuration YAML and the files it (or the caller) names:
-``pxp_tt`` + ``POS_FREED_TRANS_TWTT``, or the Level-2 CSV; the sound-speed profile; a deletion file.
+``pxp_tt`` + ``POS_FREED_TRANS_TWTT``, or ``pxp_tt`` + GNSS antenna positions with attitude
+(``GPS_POS_FREED`` + roll/pitch/heading, or an antenna CSV: :mod:`oceanloc.io.antenna_csv`) and the
+configuration's lever arm (:func:`antenna_pings`), or the Level-2 CSV; the sound-speed profile; a
+deletion file.
 :func:`localize_gnatss_input` solves the array with
 
 - ``method="oceanloc"`` (default): :func:`~oceanloc.estimation.gnssa_array.localize_gnssa_array` with
