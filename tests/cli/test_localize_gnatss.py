@@ -142,3 +142,20 @@ def test_antenna_csv_usage_errors_exit_2_with_one_reason(tmp_path: Path, extra: 
     assert reason in res.stderr
     assert "Traceback" not in res.stderr
     assert len([ln for ln in res.stderr.splitlines() if ln.startswith("error")]) == 1
+
+
+def test_skipped_antenna_csv_rows_are_reported_by_file_and_line(tmp_path: Path):
+    """A bad row of the antenna CSV is dropped, the survey is still solved, and stderr names the row."""
+    folder = gnatss_example_config().parent
+    lines = (folder / "antenna.csv").read_text().splitlines(keepends=True)
+    fields = lines[4].split(",")
+    fields[1] = "95.3"  # latitude out of range on line 5
+    lines[4] = ",".join(fields)
+    (tmp_path / "bad.csv").write_text("".join(lines))
+    res = _run(
+        "localize", "gnssa", "--format", "gnatss", str(folder / "config.yaml"), "--pxp-tt",
+        str(folder / "pxp_tt"), "--antenna", "bad.csv", "--solution", "common_shift", cwd=tmp_path,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert "bad.csv:5: out of range (latitude 95.3 deg is outside [-90, 90] deg)" in res.stderr
+    assert "SYN1-1" in res.stdout

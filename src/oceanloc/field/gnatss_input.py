@@ -698,6 +698,8 @@ def localize_gnatss_input(
     scale = 1.0 + res.speed_correction_ppm * 1e-6
     record = res.to_record()
     record.pop("exclusions", None)
+    if p.qc.issues:
+        record["qc"] = p.qc.summary(max_lines=10)  # the lines the readers skipped, printed by the CLI
     return GnatssLocalization(
         method="oceanloc",
         solution=res.solution,
@@ -759,7 +761,11 @@ def _from_gnatss(sol: GnatssSolution, data: GnatssInput, apriori_enu: FloatArray
         excluded=~sol.reply_used,
         reason=tuple(reasons),
         deletions=sol.deleted_windows,
-        extra={"outlier_t_s": sol.outlier_t_s.tolist(), "position_xyz_m": sol.position_xyz_m.tolist()},
+        extra={
+            "outlier_t_s": sol.outlier_t_s.tolist(),
+            "position_xyz_m": sol.position_xyz_m.tolist(),
+            **({"qc": p.qc.summary(max_lines=10)} if p.qc.issues else {}),
+        },
         inputs=data.inputs,
     )
 
