@@ -90,3 +90,72 @@ def test_gnatss_usage_errors_exit_2_with_one_reason(tmp_path: Path, args: list[s
     assert reason in res.stderr
     assert "Traceback" not in res.stderr
     assert len([ln for ln in res.stderr.splitlines() if ln.startswith("error")]) == 1
+
+
+def test_packaged_antenna_csv_with_lever_arm_calibration(tmp_path: Path):
+    """``--antenna antenna.csv`` (no --attitude: the CSV has the attitude) with ``--estimate-lever-arm``:
+    the lever arm is reported, and it and the positions are within 3 sigma of the truth."""
+    folder = gnatss_example_config().parent
+    res = _run(
+        "localize", "gnssa", "--format", "gnatss", str(folder / "config.yaml"), "--pxp-tt",
+        str(folder / "pxp_tt"), "--antenna", str(folder / "antenna.csv"), "--solution", "common_shift",
+        "--estimate-lever-arm", "--json", "o.json", cwd=tmp_path,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert (
+        "lever arm (forward, rightward, downward; estimated, prior sigma 1.0000/1.0000/1.0000)" in res.stdout
+    )
+    rec = json.loads((tmp_path / "o.json").read_text())
+    truth = json.loads((folder / "truth.json").read_text())
+    d = rec["details"]
+    for est, sig, true in zip(
+        d["lever_arm_body_m"], d["lever_arm_sigma_m"], truth["lever_arm_frd_m"], strict=True
+    ):
+        assert abs(est - true) < 3.0 * sig
+    for tp, true in zip(rec["transponders"], truth["transponders_enu_m"], strict=True):
+        err = [tp["e_m"] - true[0], tp["n_m"] - true[1], tp["u_m"] - true[2]]
+        sig = [tp["sigma_e_m"], tp["sigma_n_m"], tp["sigma_u_m"]]
+        assert all(abs(e) < 3.0 * s for e, s in zip(err, sig, strict=True))
+
+
+@pytest.mark.parametrize(
+    ("extra", "reason"),
+    [
+        (["--antenna", "nolon.csv"], "nolon.csv: antenna position column 'lon_deg' missing (accepted names"),
+        (["--antenna", "ANT", "--attitude", "ANT_RPH"], "exactly one of them"),
+        (["--antenna", "ANT", "--lever-arm-sigma", "abc"], "--lever-arm-sigma must be one number or three"),
+        (["--antenna", "ANT", "--lever-arm-sigma", "-1"], "--lever-arm-sigma must be one or three"),
+        (["--positions", "POS", "--estimate-lever-arm"], "--estimate-lever-arm needs --antenna"),
+        (["--antenna", "ANT", "--method", "gnatss", "--lever-arm-sigma", "0.1"], "need --method oceanloc"),
+    ],
+)  # fmt: skip
+def test_antenna_csv_usage_errors_exit_2_with_one_reason(tmp_path: Path, extra: list[str], reason: str):
+    folder = gnatss_example_config().parent
+    (tmp_path / "nolon.csv").write_text("time_utc,lat_deg,height_m,sd_e_m,sd_n_m,sd_u_m\n")
+    names = {"ANT": "antenna.csv", "ANT_RPH": "RPH", "POS": "POS_FREED_TRANS_TWTT"}
+    extra = [str(folder / names[a]) if a in names else a for a in extra]
+    res = _run(
+        "localize", "gnssa", "--format", "gnatss", str(folder / "config.yaml"), "--pxp-tt",
+        str(folder / "pxp_tt"), *extra, cwd=tmp_path,
+    )  # fmt: skip
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert reason in res.stderr
+    assert "Traceback" not in res.stderr
+    assert len([ln for ln in res.stderr.splitlines() if ln.startswith("error")]) == 1
+
+
+def test_skipped_antenna_csv_rows_are_reported_by_file_and_line(tmp_path: Path):
+    """A bad row of the antenna CSV is dropped, the survey is still solved, and stderr names the row."""
+    folder = gnatss_example_config().parent
+    lines = (folder / "antenna.csv").read_text().splitlines(keepends=True)
+    fields = lines[4].split(",")
+    fields[1] = "95.3"  # latitude out of range on line 5
+    lines[4] = ",".join(fields)
+    (tmp_path / "bad.csv").write_text("".join(lines))
+    res = _run(
+        "localize", "gnssa", "--format", "gnatss", str(folder / "config.yaml"), "--pxp-tt",
+        str(folder / "pxp_tt"), "--antenna", "bad.csv", "--solution", "common_shift", cwd=tmp_path,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert "bad.csv:5: out of range (latitude 95.3 deg is outside [-90, 90] deg)" in res.stderr
+    assert "SYN1-1" in res.stdout

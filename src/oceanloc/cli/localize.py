@@ -47,7 +47,7 @@ def gnssa(
         typer.Option(
             "--format",
             help="Input format: 'lajolla' (one transponder, the Wave Glider column files) or 'gnatss' (a "
-            "GNATSS configuration with pxp_tt + POS_FREED_TRANS_TWTT or its Level-2 CSV).",
+            "GNATSS configuration with pxp_tt + POS_FREED_TRANS_TWTT, pxp_tt + --antenna, or a Level-2 CSV).",
         ),
     ] = "lajolla",
     pxp_tt: Annotated[Path | None, typer.Option("--pxp-tt", help="gnatss: pxp_tt travel times (us).")] = None,
@@ -63,7 +63,10 @@ def gnssa(
     antenna: Annotated[
         Path | None,
         typer.Option(
-            "--antenna", help="gnatss: GPS_POS_FREED antenna positions (with --pxp-tt, --attitude)."
+            "--antenna",
+            help="gnatss: GNSS antenna positions with --pxp-tt: a GPS_POS_FREED file (with --attitude) or "
+            "an antenna CSV (recognised by its header; roll, pitch, heading columns make --attitude "
+            "unneeded). The lever arm is the configuration's posfilter.atd_offsets.",
         ),
     ] = None,
     attitude: Annotated[
@@ -72,6 +75,22 @@ def gnssa(
     deletions: Annotated[
         Path | None, typer.Option("--deletions", help="gnatss: deletion file (deletns.dat or deletions.csv).")
     ] = None,
+    lever_arm_sigma: Annotated[
+        str | None,
+        typer.Option(
+            "--lever-arm-sigma",
+            help="gnatss with --antenna: 1-sigma of the lever arm, m: one value or 'F,R,D' (forward, "
+            "rightward, downward); the estimator's prior on the lever arm, propagated to the solution.",
+        ),
+    ] = None,
+    estimate_lever_arm: Annotated[
+        bool,
+        typer.Option(
+            "--estimate-lever-arm",
+            help="gnatss with --antenna: calibrate the lever arm (needs heading variation; prior: "
+            "--lever-arm-sigma, else 1 m).",
+        ),
+    ] = False,
     method: Annotated[
         str, typer.Option(help="gnatss: 'oceanloc' (its estimator) or 'gnatss' (GNATSS's own settings).")
     ] = "oceanloc",
@@ -144,6 +163,7 @@ def gnssa(
         loc = process_gnatss_survey(
             files[0] if files else None, pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp,
             deletions=deletions, antenna=antenna, attitude=attitude, method=method, solution=solution,
+            lever_arm_sigma_m=_lever_arm_sigma(lever_arm_sigma), estimate_lever_arm=estimate_lever_arm,
         )  # fmt: skip
         _report_gnatss(loc, json_path, csv_dir, netcdf, show_exclusions)
         return
@@ -179,6 +199,19 @@ def gnssa(
         err_console.print(f"wrote {len(written)} figures to {escape(str(figures))}")
     if json_path is not None:
         write_json(json_path, res, cli_provenance(inputs=res.paths))
+
+
+def _lever_arm_sigma(text: str | None) -> list[float] | None:
+    """``--lever-arm-sigma``: one value or three comma-separated, metres."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ConfigError(
+            f"--lever-arm-sigma must be one number or three 'F,R,D' in metres, got {text!r}"
+        ) from None
+    return values
 
 
 def _report_gnatss(

@@ -479,6 +479,7 @@ class GnssaArrayResult:
             "gradient_n_per_km": float(self.gradient_per_km[1]),
             "lever_arm_body_m": [float(v) for v in self.lever_arm_body_m],
             "lever_arm_sigma_m": [float(v) for v in np.sqrt(np.diag(self.lever_arm_covariance_m2))],
+            "lever_arm_covariance_m2": self.lever_arm_covariance_m2.tolist(),
             "lever_arm_estimated": bool(self.lever_arm_estimated),
             "lever_arm_prior_sigma_m": [float(v) for v in self.lever_arm_prior_sigma_m],
             "lever_arm_determined": [bool(v) for v in self.lever_arm_determined],

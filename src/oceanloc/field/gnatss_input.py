@@ -1,7 +1,10 @@
 """GNSS-A array surveys in GNATSS's formats: read them, solve them (oceanloc's way or GNATSS's), report.
 
 :func:`load_gnatss_input` reads a GNATSS configuration YAML and the files it (or the caller) names:
-``pxp_tt`` + ``POS_FREED_TRANS_TWTT``, or the Level-2 CSV; the sound-speed profile; a deletion file.
+``pxp_tt`` + ``POS_FREED_TRANS_TWTT``, or ``pxp_tt`` + GNSS antenna positions with attitude
+(``GPS_POS_FREED`` + roll/pitch/heading, or an antenna CSV: :mod:`oceanloc.io.antenna_csv`) and the
+configuration's lever arm (:func:`antenna_pings`), or the Level-2 CSV; the sound-speed profile; a
+deletion file.
 :func:`localize_gnatss_input` solves the array with
 
 - ``method="oceanloc"`` (default): :func:`~oceanloc.estimation.gnssa_array.localize_gnssa_array` with
@@ -19,6 +22,7 @@ dataset (:meth:`to_dataset`) and the JSON record (:meth:`to_record`, with its ``
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,6 +35,7 @@ from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, apriori_xyz_m, gnatss_solve
 from oceanloc.estimation.gnssa_array import ArrayGeometry, GnssaArrayOptions, localize_gnssa_array
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
+from oceanloc.io.antenna_csv import AntennaCsv, is_antenna_csv, read_antenna_csv
 from oceanloc.io.gnatss import (
     J2000_UNIX_S,
     RESIDUAL_SPEED_MPS,
@@ -64,8 +69,48 @@ SOLUTIONS: tuple[str, ...] = ("independent", "common_shift")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
+class AntennaReplies:
+    """Per reply of an :class:`~oceanloc.io.gnatss.ArrayPings` built from an antenna track: the GNSS
+    antenna's position (ENU about the array centre) and covariance, and the body-to-ENU rotation, at
+    transmit and at receive, with the body-frame lever arm and its covariance. The estimator places the
+    transducer at ``x_A + R l`` itself, so it can carry the lever arm as an unknown with a prior
+    (:mod:`oceanloc.estimation.gnssa_array`).
+
+    Attributes
+    ----------
+    transmit_enu_m, receive_enu_m : (n, 3) float
+    transmit_cov_m2, receive_cov_m2 : (n, 3, 3) float
+        ENU covariance of the antenna position, m^2.
+    transmit_rotation, receive_rotation : (n, 3, 3) float
+    lever_arm_frd_m : (3,) float
+        Forward, rightward, downward, metres.
+    lever_arm_cov_m2 : (3, 3) float
+        Its covariance (zeros: known exactly).
+    """
+
+    transmit_enu_m: FloatArray
+    transmit_cov_m2: FloatArray
+    transmit_rotation: FloatArray
+    receive_enu_m: FloatArray
+    receive_cov_m2: FloatArray
+    receive_rotation: FloatArray
+    lever_arm_frd_m: FloatArray
+    lever_arm_cov_m2: FloatArray
+
+    def select(self, keep: BoolArray) -> AntennaReplies:
+        """The replies where ``keep`` is True."""
+        return AntennaReplies(
+            transmit_enu_m=self.transmit_enu_m[keep], transmit_cov_m2=self.transmit_cov_m2[keep],
+            transmit_rotation=self.transmit_rotation[keep], receive_enu_m=self.receive_enu_m[keep],
+            receive_cov_m2=self.receive_cov_m2[keep], receive_rotation=self.receive_rotation[keep],
+            lever_arm_frd_m=self.lever_arm_frd_m, lever_arm_cov_m2=self.lever_arm_cov_m2,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
 class GnatssInput:
-    """A GNATSS-format survey, read: configuration, replies, profile, deletions, per-transponder speeds."""
+    """A GNATSS-format survey, read: configuration, replies, profile, deletions, per-transponder speeds;
+    ``antenna`` when the replies came from an antenna track with attitude (else None)."""
 
     config: GnatssConfig
     pings: ArrayPings
@@ -73,33 +118,80 @@ class GnatssInput:
     deletions: FloatArray
     sound_speed_mps: FloatArray
     inputs: tuple[str, ...]
+    antenna: AntennaReplies | None = None
 
 
-def transducer_pings_from_antenna(
+def lever_arm_covariance(sigma_m: float | Sequence[float] | None) -> FloatArray:
+    """The lever arm's covariance from one 1-sigma for every component or three (forward, rightward,
+    downward), metres: ``diag(sigma^2)``; zeros for None.
+
+    Raises
+    ------
+    ConfigError
+        A sigma that is negative, not finite, or not one or three values.
+    """
+    if sigma_m is None:
+        return np.zeros((3, 3))
+    sig = np.atleast_1d(np.asarray(sigma_m, dtype=float))
+    if sig.size not in (1, 3) or not np.all(np.isfinite(sig)) or np.any(sig < 0.0) or np.any(sig > 10.0):
+        raise ConfigError(
+            f"--lever-arm-sigma must be one or three (forward, rightward, downward) values in [0, 10] m, "
+            f"got {sig.tolist()}"
+        )
+    return np.diag(np.broadcast_to(sig, (3,)) ** 2)
+
+
+def antenna_pings(
     travel: PxpTravelTimes,
-    antenna: AntennaPositions,
-    attitude: Attitude,
+    antenna: AntennaPositions | AntennaCsv,
+    attitude: Attitude | None,
     ids: tuple[str, ...],
     lever_arm_frd_m: FloatArray,
     origin: EnuOrigin,
-) -> ArrayPings:
-    """Per-reply transducer positions from GNSS antenna positions, attitude and the body-frame lever arm.
+    lever_arm_cov_m2: FloatArray | None = None,
+) -> tuple[ArrayPings, AntennaReplies]:
+    """Per-reply transducer positions from GNSS antenna positions, attitude and the body-frame lever arm,
+    and the antenna samples they came from.
 
     What GNATSS's posfilter does, without its Kalman filter: the antenna track (``GPS_POS_FREED``:
-    Earth-fixed positions and sigmas) and the roll-pitch-heading record are interpolated linearly to
-    each interrogation and each reply epoch (``time + travel time``;
-    :func:`~oceanloc.models.attitude.interpolate_track`), and the transducer is placed at
+    Earth-fixed positions and sigmas; or an antenna CSV, :mod:`oceanloc.io.antenna_csv`: full
+    covariances, and the attitude in the same rows unless ``attitude`` is given) and the roll, pitch,
+    heading are interpolated linearly to each interrogation and each reply epoch (``time + travel
+    time``; :func:`~oceanloc.models.attitude.interpolate_track`), and the transducer is placed at
     ``x_A + R(roll, pitch, heading) l`` (:func:`~oceanloc.models.attitude.transducer_enu_m`, body frame
-    forward-starboard-down as GNATSS's ``atd_offsets``). The antenna covariance is carried over; replies
-    whose epochs lie outside either record are recorded in the travel-time file's QC and skipped.
+    forward-starboard-down as GNATSS's ``atd_offsets``). The antenna covariance is carried over to the
+    transducer; the lever arm's covariance is not added per reply (its error is common to every ping)
+    but handed to the estimator as the lever arm's prior (:class:`AntennaReplies`). Replies whose
+    epochs lie outside either record are recorded in the travel-time file's QC and skipped.
+
+    Raises
+    ------
+    ConfigError
+        No attitude (neither ``attitude`` nor attitude columns in the antenna CSV), or both.
+    DataError
+        No reply within the records.
     """
+    if isinstance(antenna, AntennaCsv):
+        if (antenna.rph_deg is None) == (attitude is None):
+            raise ConfigError(
+                f"{antenna.path}: roll, pitch, heading come either from the antenna CSV's roll_deg, "
+                "pitch_deg, heading_deg columns or from --attitude, exactly one of them"
+            )
+        ant_t, ant_xyz, ant_cov_xyz = antenna.t_s, antenna.xyz_m, antenna.cov_xyz_m2
+        att_t, att_deg = (attitude.t_s, attitude.rph_deg) if attitude else (antenna.t_s, antenna.rph_deg)
+        att_path = attitude.path if attitude else antenna.path
+    else:
+        if attitude is None:
+            raise ConfigError(f"{antenna.path}: GPS_POS_FREED antenna positions need --attitude")
+        ant_t, ant_xyz = antenna.t_s, antenna.xyz_m
+        ant_cov_xyz = np.einsum("ki,ij->kij", antenna.sigma_xyz_m**2, np.eye(3))
+        att_t, att_deg, att_path = attitude.t_s, attitude.rph_deg, attitude.path
     rot = _ecef_to_enu_rotation(origin)
-    ant_enu = _enu(antenna.xyz_m, origin)
-    ant_cov = rot @ (np.eye(3)[None] * antenna.sigma_xyz_m[:, None, :] ** 2) @ rot.T
+    ant_enu = _enu(ant_xyz, origin)
+    ant_cov = rot @ ant_cov_xyz @ rot.T
     t_tx = travel.t_transmit_s
     t_rx = t_tx[:, None] + np.nan_to_num(travel.twtt_s)
-    lo = max(antenna.t_s[0], attitude.t_s[0])
-    hi = min(antenna.t_s[-1], attitude.t_s[-1])
+    lo, hi = max(ant_t[0], att_t[0]), min(ant_t[-1], att_t[-1])
     tx_ok = (t_tx >= lo) & (t_tx <= hi)
     ok = np.isfinite(travel.twtt_s) & tx_ok[:, None] & (t_rx >= lo) & (t_rx <= hi)
     for i in np.flatnonzero(~tx_ok):
@@ -111,31 +203,49 @@ def transducer_pings_from_antenna(
         )
     rows, tps = np.nonzero(ok)
     if rows.size == 0:
-        raise DataError(
-            f"{travel.path}: no reply lies within the antenna ({antenna.path}) and attitude records"
-        )
-    zeros3 = np.zeros((attitude.t_s.size, 3))
+        where = antenna.path if att_path == antenna.path else f"{antenna.path}) and attitude ({att_path}"
+        raise DataError(f"{travel.path}: no reply lies within the antenna ({where}) records")
+    lever = np.asarray(lever_arm_frd_m, dtype=float)
 
-    def transducer(t: FloatArray) -> tuple[FloatArray, FloatArray]:
-        pos, cov, _ = interpolate_track(antenna.t_s, t, ant_enu, ant_cov, np.zeros((antenna.t_s.size, 3)))
+    def sample(t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        pos, cov, _ = interpolate_track(ant_t, t, ant_enu, ant_cov, np.zeros((ant_t.size, 3)))
         _, _, att = interpolate_track(
-            attitude.t_s, t, zeros3, np.zeros((attitude.t_s.size, 3, 3)), attitude.rph_deg
+            att_t, t, np.zeros((att_t.size, 3)), np.zeros((att_t.size, 3, 3)), att_deg
         )
         r = rotation_enu_from_body(att[:, 0], att[:, 1], att[:, 2])
-        enu = transducer_enu_m(pos, r, lever_arm_frd_m)
+        enu = transducer_enu_m(pos, r, lever)
         x, y, z = pymap3d.enu2ecef(
             enu[:, 0], enu[:, 1], enu[:, 2], origin.lat_deg, origin.lon_deg, origin.h_m
         )
-        return np.stack([x, y, z], axis=-1), rot.T @ cov @ rot
+        return pos, cov, r, np.stack([x, y, z], axis=-1)
 
-    tx_xyz, tx_cov = transducer(t_tx[rows])
-    rx_xyz, rx_cov = transducer(t_rx[rows, tps])
+    a_tx, c_tx, r_tx, tx_xyz = sample(t_tx[rows])
+    a_rx, c_rx, r_rx, rx_xyz = sample(t_rx[rows, tps])
     travel.qc.records_kept = int(np.unique(rows).size)
-    return ArrayPings(
+    pings = ArrayPings(
         path=travel.path, ids=ids, transponder=tps.astype(np.int64), t_transmit_s=t_tx[rows],
-        twtt_s=travel.twtt_s[rows, tps], transmit_xyz_m=tx_xyz, receive_xyz_m=rx_xyz, transmit_cov_m2=tx_cov,
-        receive_cov_m2=rx_cov, line=travel.line[rows], qc=travel.qc,
+        twtt_s=travel.twtt_s[rows, tps], transmit_xyz_m=tx_xyz, receive_xyz_m=rx_xyz,
+        transmit_cov_m2=rot.T @ c_tx @ rot, receive_cov_m2=rot.T @ c_rx @ rot, line=travel.line[rows],
+        qc=travel.qc,
     )  # fmt: skip
+    replies = AntennaReplies(
+        transmit_enu_m=a_tx, transmit_cov_m2=c_tx, transmit_rotation=r_tx, receive_enu_m=a_rx,
+        receive_cov_m2=c_rx, receive_rotation=r_rx, lever_arm_frd_m=lever,
+        lever_arm_cov_m2=np.zeros((3, 3)) if lever_arm_cov_m2 is None else np.asarray(lever_arm_cov_m2),
+    )  # fmt: skip
+    return pings, replies
+
+
+def transducer_pings_from_antenna(
+    travel: PxpTravelTimes,
+    antenna: AntennaPositions | AntennaCsv,
+    attitude: Attitude | None,
+    ids: tuple[str, ...],
+    lever_arm_frd_m: FloatArray,
+    origin: EnuOrigin,
+) -> ArrayPings:
+    """The transducer positions of :func:`antenna_pings` (Earth-fixed, with the antenna's covariance)."""
+    return antenna_pings(travel, antenna, attitude, ids, lever_arm_frd_m, origin)[0]
 
 
 def load_gnatss_input(
@@ -148,49 +258,66 @@ def load_gnatss_input(
     deletions: str | Path | None = None,
     antenna: str | Path | None = None,
     attitude: str | Path | None = None,
+    lever_arm_sigma_m: float | Sequence[float] | None = None,
 ) -> GnatssInput:
     """Read a GNATSS survey; paths given here override the configuration's ``solver.input_files``.
 
-    Replies come from ``pxp_tt`` + ``positions`` (``POS_FREED_TRANS_TWTT``) if both are given, from
-    ``pxp_tt`` + ``antenna`` (``GPS_POS_FREED``) + ``attitude`` (roll, pitch, heading) with the
-    configuration's ``posfilter.atd_offsets`` lever arm (:func:`transducer_pings_from_antenna`), else
-    from ``level2`` (or the configuration's ``gps_solution``). Each transponder's speed is the
-    profile's harmonic mean from ``harmonic_mean_start_depth`` to its a-priori depth, rounded to
-    1 mm/s as GNATSS does (or the configuration's ``sv_mean`` when there is no profile).
+    Replies come from ``pxp_tt`` + ``positions`` (``POS_FREED_TRANS_TWTT``) if both are given; from
+    ``pxp_tt`` + ``antenna`` with the configuration's ``posfilter.atd_offsets`` lever arm
+    (:func:`antenna_pings`), the antenna being a ``GPS_POS_FREED`` file with an ``attitude`` (roll,
+    pitch, heading) file or an antenna CSV (:mod:`oceanloc.io.antenna_csv`, recognised by its header)
+    that carries the attitude itself; else from ``level2`` (or the configuration's ``gps_solution``).
+    ``lever_arm_sigma_m`` (one or three 1-sigmas, forward, rightward, downward, metres) is the lever
+    arm's uncertainty, the estimator's prior on it (antenna input only). Each transponder's speed is the
+    profile's harmonic mean from ``harmonic_mean_start_depth`` to its a-priori depth, rounded to 1 mm/s
+    as GNATSS does (or the configuration's ``sv_mean`` when there is no profile).
 
     Raises
     ------
     ConfigError
-        If no reply source or no sound speed is given.
+        If no reply source or no sound speed is given, or the inputs do not go together.
     DataError
         From the readers (bad files).
     """
     config = read_gnatss_config(config_path)
     ins = config.inputs
-    if (antenna is None) != (attitude is None):
+    antenna_is_csv = antenna is not None and is_antenna_csv(antenna)
+    if (antenna is None and attitude is not None) or (
+        antenna is not None and not antenna_is_csv and attitude is None
+    ):
         raise ConfigError(
-            "--antenna and --attitude go together (GNSS antenna positions and roll, pitch, heading)"
+            "--antenna and --attitude go together (GNSS antenna positions and roll, pitch, heading), "
+            "unless --antenna is an antenna CSV with roll_deg, pitch_deg, heading_deg columns"
         )
     if antenna is not None and (pxp_tt is None or positions is not None):
         raise ConfigError("--antenna and --attitude need --pxp-tt (and no --positions)")
     if (pxp_tt is None) != (positions is None) and antenna is None:
         raise ConfigError("--pxp-tt and --positions go together (travel times and transducer positions)")
+    if lever_arm_sigma_m is not None and antenna is None:
+        raise ConfigError(
+            "--lever-arm-sigma needs --antenna: the lever arm applies to antenna positions, not to "
+            "transducer positions (--positions, --level2)"
+        )
+    lever_cov = lever_arm_covariance(lever_arm_sigma_m)
     used: list[str] = [str(config_path)]
-    if antenna is not None and attitude is not None and pxp_tt is not None:
+    replies: AntennaReplies | None = None
+    if antenna is not None and pxp_tt is not None:
         if config.atd_offsets_frd_m is None:
             raise ConfigError(
                 f"{config_path}: --antenna needs the lever arm posfilter.atd_offsets (forward, rightward, "
                 "downward)"
             )
-        pings = transducer_pings_from_antenna(
-            read_pxp_tt(pxp_tt, len(config.ids)),
-            read_gps_pos_freed(antenna),
-            read_roll_pitch_heading(attitude),
-            config.ids,
-            np.asarray(config.atd_offsets_frd_m),
-            config.array_center,
-        )
-        used += [str(pxp_tt), str(antenna), str(attitude)]
+        travel = read_pxp_tt(pxp_tt, len(config.ids))
+        track = read_antenna_csv(antenna) if antenna_is_csv else read_gps_pos_freed(antenna)
+        att = read_roll_pitch_heading(attitude) if attitude is not None else None
+        for extra in (track.qc, *((att.qc,) if att else ())):
+            travel.qc.issues.extend(extra.issues)
+            travel.qc.lines_read += extra.lines_read
+        pings, replies = antenna_pings(
+            travel, track, att, config.ids, np.asarray(config.atd_offsets_frd_m), config.array_center,
+            lever_cov,
+        )  # fmt: skip
+        used += [str(pxp_tt), str(antenna), *((str(attitude),) if attitude is not None else ())]
     elif pxp_tt is not None and positions is not None:
         pings = join_pxp_positions(
             read_pxp_tt(pxp_tt, len(config.ids)), read_pos_freed_trans_twtt(positions), config.ids
@@ -226,6 +353,7 @@ def load_gnatss_input(
         deletions=windows,
         sound_speed_mps=speeds,
         inputs=tuple(used),
+        antenna=replies,
     )
 
 
@@ -503,34 +631,48 @@ def localize_gnatss_input(
     origin = cfg.array_center
     apriori_enu = _enu(apriori_xyz_m(cfg), origin)
     p = data.pings
+    ant = data.antenna
+    opts = options or GnssaArrayOptions(solution=solution)
     if method == "gnatss":
+        if ant is not None and np.any(ant.lever_arm_cov_m2 != 0.0):
+            raise ConfigError(
+                "a lever-arm sigma is used by --method oceanloc only (GNATSS fixes the lever arm)"
+            )
         sol = gnatss_solve(p, cfg, data.sound_speed_mps, settings, data.deletions)
         return _from_gnatss(sol, data, apriori_enu)
+    if opts.estimate_lever_arm and ant is None:
+        raise ConfigError(
+            "--estimate-lever-arm needs --antenna (antenna positions with attitude): transducer positions "
+            "(--positions, --level2) have no lever arm to calibrate"
+        )
     deleted = in_windows(p.t_transmit_s, data.deletions)
     keep = ~deleted
     pk = p.select(keep)
     rot = _ecef_to_enu_rotation(origin)
     t_unique, first, ping = np.unique(pk.t_transmit_s, return_index=True, return_inverse=True)
-    survey = array_survey_from_transducers(
-        name=Path(p.path).name,
-        t_transmit_s=t_unique,
-        transmit_enu_m=_enu(pk.transmit_xyz_m[first], origin),
-        transmit_cov_m2=rot @ pk.transmit_cov_m2[first] @ rot.T,
-        reply_ping=ping,
-        reply_transponder=pk.transponder,
-        twtt_s=pk.twtt_s,
-        receive_enu_m=_enu(pk.receive_xyz_m, origin),
-        receive_cov_m2=rot @ pk.receive_cov_m2 @ rot.T,
-        turnaround_s=np.array([t.internal_delay_s for t in cfg.transponders]),
-        transponder_ids=cfg.ids,
-        origin=origin,
-        approx_positions_enu_m=apriori_enu,
-        line=pk.line,
-        path=p.path,
-        qc=p.qc,
-        time_origin_unix_s=J2000_UNIX_S,  # GNATSS's times are J2000 seconds: the record's epoch_utc
-    )
-    opts = options or GnssaArrayOptions(solution=solution)
+    common = {
+        "name": Path(p.path).name, "t_transmit_s": t_unique, "reply_ping": ping,
+        "reply_transponder": pk.transponder, "twtt_s": pk.twtt_s,
+        "turnaround_s": np.array([t.internal_delay_s for t in cfg.transponders]), "transponder_ids": cfg.ids,
+        "origin": origin, "approx_positions_enu_m": apriori_enu, "line": pk.line, "path": p.path, "qc": p.qc,
+        "time_origin_unix_s": J2000_UNIX_S,  # GNATSS's times are J2000 seconds: the record's epoch_utc
+    }  # fmt: skip
+    if ant is None:
+        survey = array_survey_from_transducers(
+            transmit_enu_m=_enu(pk.transmit_xyz_m[first], origin),
+            transmit_cov_m2=rot @ pk.transmit_cov_m2[first] @ rot.T,
+            receive_enu_m=_enu(pk.receive_xyz_m, origin),
+            receive_cov_m2=rot @ pk.receive_cov_m2 @ rot.T,
+            **common,
+        )
+    else:
+        ak = ant.select(keep)
+        survey = array_survey_from_transducers(
+            transmit_enu_m=ak.transmit_enu_m[first], transmit_cov_m2=ak.transmit_cov_m2[first],
+            transmit_rotation=ak.transmit_rotation[first], receive_enu_m=ak.receive_enu_m,
+            receive_cov_m2=ak.receive_cov_m2, receive_rotation=ak.receive_rotation,
+            lever_arm_body_m=ak.lever_arm_frd_m, lever_arm_cov_m2=ak.lever_arm_cov_m2, **common,
+        )  # fmt: skip
     profile = (
         None
         if data.profile is None
@@ -556,6 +698,8 @@ def localize_gnatss_input(
     scale = 1.0 + res.speed_correction_ppm * 1e-6
     record = res.to_record()
     record.pop("exclusions", None)
+    if p.qc.issues:
+        record["qc"] = p.qc.summary(max_lines=10)  # the lines the readers skipped, printed by the CLI
     return GnatssLocalization(
         method="oceanloc",
         solution=res.solution,
@@ -617,7 +761,11 @@ def _from_gnatss(sol: GnatssSolution, data: GnatssInput, apriori_enu: FloatArray
         excluded=~sol.reply_used,
         reason=tuple(reasons),
         deletions=sol.deleted_windows,
-        extra={"outlier_t_s": sol.outlier_t_s.tolist(), "position_xyz_m": sol.position_xyz_m.tolist()},
+        extra={
+            "outlier_t_s": sol.outlier_t_s.tolist(),
+            "position_xyz_m": sol.position_xyz_m.tolist(),
+            **({"qc": p.qc.summary(max_lines=10)} if p.qc.issues else {}),
+        },
         inputs=data.inputs,
     )
 
@@ -641,16 +789,25 @@ def process_gnatss_survey(
     attitude: str | Path | None = None,
     method: str = "oceanloc",
     solution: str = "independent",
+    lever_arm_sigma_m: float | Sequence[float] | None = None,
+    estimate_lever_arm: bool = False,
 ) -> GnatssLocalization:
     """Read and solve a GNATSS-format survey (the packaged example when ``config_path`` is None): the one
-    call behind ``oceanloc localize gnssa --format gnatss``."""
+    call behind ``oceanloc localize gnssa --format gnatss``. ``lever_arm_sigma_m``: the lever arm's
+    1-sigma (its prior in the estimator); ``estimate_lever_arm``: calibrate it (prior 1 m per component
+    unless a sigma is given); both need antenna input and ``method="oceanloc"``."""
     if method not in METHODS:
         raise ConfigError(f"--method must be one of {', '.join(METHODS)}, got {method!r}")
     if solution not in SOLUTIONS:
         raise ConfigError(f"--solution must be one of {', '.join(SOLUTIONS)}, got {solution!r}")
+    if method == "gnatss" and (estimate_lever_arm or lever_arm_sigma_m is not None):
+        raise ConfigError(
+            "--estimate-lever-arm and --lever-arm-sigma need --method oceanloc (GNATSS fixes the lever arm)"
+        )
     data = load_gnatss_input(
         config_path or gnatss_example_config(),
         pxp_tt=pxp_tt, positions=positions, level2=level2, ssp=ssp, deletions=deletions, antenna=antenna,
-        attitude=attitude,
+        attitude=attitude, lever_arm_sigma_m=lever_arm_sigma_m,
     )  # fmt: skip
-    return localize_gnatss_input(data, method=method, solution=solution)
+    opts = GnssaArrayOptions(solution=solution, estimate_lever_arm=estimate_lever_arm)
+    return localize_gnatss_input(data, method=method, solution=solution, options=opts)

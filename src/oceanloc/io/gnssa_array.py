@@ -225,8 +225,17 @@ def array_survey_from_transducers(
     path: str = "",
     qc: QcReport | None = None,
     time_origin_unix_s: float = GPS_EPOCH_2020_UNIX_S,
+    transmit_rotation: ArrayLike | None = None,
+    receive_rotation: ArrayLike | None = None,
+    lever_arm_body_m: ArrayLike | None = None,
+    lever_arm_cov_m2: ArrayLike | None = None,
 ) -> GnssaArraySurvey:
-    """A survey from transducer positions given directly (no lever arm): see :class:`GnssaArraySurvey`."""
+    """A survey from positions sampled at transmit and at each receive: see :class:`GnssaArraySurvey`.
+
+    Without rotations and lever arm these are the transducer positions (identity rotations, a zero lever
+    arm known exactly). With them they are the GNSS antenna's, already sampled at those epochs (e.g. by
+    :func:`oceanloc.field.gnatss_input.antenna_pings`), and the transducer is ``x_A + R l``.
+    """
     t_tx = np.asarray(t_transmit_s, dtype=float)
     ping = np.asarray(reply_ping, dtype=np.int64)
     twtt = np.asarray(twtt_s, dtype=float)
@@ -239,16 +248,22 @@ def array_survey_from_transducers(
         t_transmit_s=t_tx,
         transmit_antenna_enu_m=np.asarray(transmit_enu_m, dtype=float),
         transmit_antenna_cov_m2=np.asarray(transmit_cov_m2, dtype=float),
-        transmit_rotation=_identity(t_tx.size),
+        transmit_rotation=_identity(t_tx.size)
+        if transmit_rotation is None
+        else np.asarray(transmit_rotation, dtype=float),
         reply_ping=ping,
         reply_transponder=np.asarray(reply_transponder, dtype=np.int64),
         twtt_s=twtt,
         t_receive_s=t_rx,
         receive_antenna_enu_m=np.asarray(receive_enu_m, dtype=float),
         receive_antenna_cov_m2=np.asarray(receive_cov_m2, dtype=float),
-        receive_rotation=_identity(twtt.size),
-        lever_arm_body_m=np.zeros(3),
-        lever_arm_cov_m2=np.zeros((3, 3)),
+        receive_rotation=_identity(twtt.size)
+        if receive_rotation is None
+        else np.asarray(receive_rotation, dtype=float),
+        lever_arm_body_m=np.zeros(3) if lever_arm_body_m is None else np.asarray(lever_arm_body_m, float),
+        lever_arm_cov_m2=np.zeros((3, 3))
+        if lever_arm_cov_m2 is None
+        else np.asarray(lever_arm_cov_m2, float),
         turnaround_s=np.asarray(turnaround_s, dtype=float).reshape(-1),
         approx_positions_enu_m=None
         if approx_positions_enu_m is None

@@ -14,7 +14,8 @@ replies can be added.
 Files (:func:`write_gnatss_survey`): ``config.yaml`` (GNATSS configuration: array centre, a-priori
 transponder positions = truth + a common offset, internal delays, solver limits), ``pxp_tt``,
 ``POS_FREED_TRANS_TWTT``, ``gps_solution.csv`` (Level-2), ``ctd_profile.txt``, ``GPS_POS_FREED``
-(antenna), ``RPH`` (attitude) and ``truth.json``.
+(antenna), ``RPH`` (attitude), ``antenna.csv`` (the same antenna track and attitude as one antenna CSV,
+:mod:`oceanloc.io.antenna_csv`) and ``truth.json``.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import pymap3d
 
 from oceanloc._typing import FloatArray
 from oceanloc.geo.enu import EnuOrigin
+from oceanloc.io.antenna_csv import write_antenna_csv
 from oceanloc.io.gnatss import (
     ArrayPings,
     SoundSpeedProfile,
@@ -323,6 +325,7 @@ class GnatssSurveyFiles:
     gps_pos_freed: Path
     roll_pitch_heading: Path
     truth: Path
+    antenna_csv: Path
 
 
 EXAMPLE_SPEC = ArraySurveySpec(
@@ -427,18 +430,23 @@ def write_gnatss_survey(
     sig_xyz = np.sqrt(
         np.diag(_enu_cov_to_ecef(np.diag(sig_enu**2), truth.origin))
     )  # the format's ECEF sigmas
-    write_gps_pos_freed(
-        out / "GPS_POS_FREED", t_all[order], _to_ecef(ant, truth.origin), np.tile(sig_xyz, (t_rel.size, 1))
-    )
-    write_roll_pitch_heading(
-        out / "RPH", t_all[order], np.column_stack([rph[:, 0], rph[:, 1], rph[:, 2] % 360.0])
-    )
+    ant_xyz = np.round(_to_ecef(ant, truth.origin), 4)  # the digits GPS_POS_FREED carries
+    sig_xyz = np.round(sig_xyz, 4)
+    rph = np.round(np.column_stack([rph[:, 0], rph[:, 1], rph[:, 2] % 360.0]), 5)  # the RPH file's digits
+    write_gps_pos_freed(out / "GPS_POS_FREED", t_all[order], ant_xyz, np.tile(sig_xyz, (t_rel.size, 1)))
+    write_roll_pitch_heading(out / "RPH", t_all[order], rph)
+    # the same track and attitude as one antenna CSV (UTC times, latitude/longitude/height, ECEF sigmas)
+    cov_ant = np.broadcast_to(np.diag(sig_xyz**2), (t_rel.size, 3, 3))
+    write_antenna_csv(
+        out / "antenna.csv", t_all[order], ant_xyz, cov_ant, rph, time="iso", position="geodetic",
+        covariance="sd_xyz",
+    )  # fmt: skip
     write_gnatss_config(out / "config.yaml", gnatss_config_dict(truth, out, relative=relative))
     (out / "truth.json").write_text(json.dumps(truth.to_record(), indent=1), encoding="utf-8")
     files = GnatssSurveyFiles(
         folder=out, config=out / "config.yaml", pxp_tt=out / "pxp_tt",
         pos_freed_trans_twtt=out / "POS_FREED_TRANS_TWTT", level2_csv=out / "gps_solution.csv",
         sound_speed=out / "ctd_profile.txt", gps_pos_freed=out / "GPS_POS_FREED",
-        roll_pitch_heading=out / "RPH", truth=out / "truth.json",
+        roll_pitch_heading=out / "RPH", truth=out / "truth.json", antenna_csv=out / "antenna.csv",
     )  # fmt: skip
     return truth, files

@@ -249,9 +249,19 @@ def gnatss_summary_lines(loc: GnatssLocalization) -> list[str]:
             reasons[key] = reasons.get(key, 0) + 1
     by = ", ".join(f"{k}: {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
     speeds = "/".join(f"{c:.3f}" for c in loc.sound_speed_mps)
-    return [
+    lines = [
         f"{int((~loc.excluded).sum())} of {loc.excluded.size} replies used"
         + (f"; excluded: {by}" if by else ""),
         f"converged: {'yes' if loc.converged else 'no'} after {len(loc.iterations)} iterations; "
         f"sound speed {speeds} m/s",
     ]
+    prior = loc.extra.get("lever_arm_prior_sigma_m")
+    if loc.extra.get("lever_arm_estimated") or (prior and any(v > 0 for v in prior)):
+        arm = ", ".join(
+            f"{a:.4f} +- {s:.4f}"
+            for a, s in zip(loc.extra["lever_arm_body_m"], loc.extra["lever_arm_sigma_m"], strict=True)
+        )
+        what = "estimated" if loc.extra.get("lever_arm_estimated") else "with its prior"
+        prior_txt = "/".join(f"{v:.4f}" for v in prior or [])
+        lines.append(f"lever arm (forward, rightward, downward; {what}, prior sigma {prior_txt}): {arm} m")
+    return lines
