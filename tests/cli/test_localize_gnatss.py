@@ -102,9 +102,9 @@ def test_packaged_antenna_csv_with_lever_arm_calibration(tmp_path: Path):
         "--estimate-lever-arm", "--json", "o.json", cwd=tmp_path,
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
-    assert (
-        "lever arm (forward, rightward, downward; estimated, prior sigma 1.0000/1.0000/1.0000)" in res.stdout
-    )
+    assert "lever arm forward, rightward, downward (estimated): " in res.stdout
+    assert "lever arm prior sigma 1.0000/1.0000/1.0000 m" in res.stdout
+    assert max(len(line) for line in res.stdout.splitlines()) <= 100
     rec = json.loads((tmp_path / "o.json").read_text())
     truth = json.loads((folder / "truth.json").read_text())
     d = rec["details"]

@@ -263,5 +263,6 @@ def gnatss_summary_lines(loc: GnatssLocalization) -> list[str]:
         )
         what = "estimated" if loc.extra.get("lever_arm_estimated") else "with its prior"
         prior_txt = "/".join(f"{v:.4f}" for v in prior or [])
-        lines.append(f"lever arm (forward, rightward, downward; {what}, prior sigma {prior_txt}): {arm} m")
+        lines.append(f"lever arm forward, rightward, downward ({what}): {arm} m")
+        lines.append(f"lever arm prior sigma {prior_txt} m")
     return lines
