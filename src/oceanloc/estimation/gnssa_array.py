@@ -62,6 +62,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import stats
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
@@ -138,6 +139,12 @@ class GnssaArrayOptions:
         Add the survey-wide GNSS error to the covariance (common to every transponder).
     max_rounds : int
         Largest number of outlier rounds.
+    select_model : bool
+        Keep only the sound-speed and gradient parameters the survey supports (see
+        :func:`select_model`): the gradient, the speed's variation in time, then the constant scale, each
+        dropped when its likelihood-ratio statistic is below the chi-square quantile ``1 - selection_alpha``.
+    selection_alpha : float
+        Significance level of each of those tests, in (0, 0.5).
     """
 
     solution: str = "independent"
@@ -169,6 +176,8 @@ class GnssaArrayOptions:
     jackknife_blocks: int = 10
     gnss_common_mode: bool = True
     max_rounds: int = 200
+    select_model: bool = True
+    selection_alpha: float = 0.01
 
     def __post_init__(self) -> None:
         if self.solution not in SOLUTIONS:
@@ -203,6 +212,8 @@ class GnssaArrayOptions:
             raise ConfigError("jackknife_blocks must be 0 (off) or at least 2")
         if self.knot_spacing_s is not None and self.knot_spacing_s <= 0.0:
             raise ConfigError("knot_spacing_s must be positive (or None for one constant speed)")
+        if not 0.0 < self.selection_alpha < 0.5:
+            raise ConfigError(f"selection_alpha must be in (0, 0.5), got {self.selection_alpha}")
 
 
 def gnatss_like_options(**overrides: object) -> GnssaArrayOptions:
@@ -222,6 +233,7 @@ def gnatss_like_options(**overrides: object) -> GnssaArrayOptions:
         prescreen=False,
         jackknife_blocks=0,
         gnss_common_mode=False,
+        select_model=False,
     )
     return dataclasses.replace(base, **overrides)  # type: ignore[arg-type]
 
@@ -281,6 +293,55 @@ class ArrayIteration:
 
     def to_record(self) -> dict:
         return {k: (float(v) if isinstance(v, float) else v) for k, v in dataclasses.asdict(self).items()}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ModelTest:
+    """One likelihood-ratio test of :func:`select_model`: does the survey support a group of parameters?
+
+    Attributes
+    ----------
+    name : str
+        ``gradient`` (east and north slowness gradient), ``sound_speed_variation`` (the knots of ``c(t)``
+        against one constant speed) or ``sound_speed_scale`` (that constant speed against ``c_ref``).
+    dof : int
+        Parameters the smaller model lacks (constraints tested).
+    statistic : float
+        Increase of the weighted cost (``-2 log`` posterior) when they are removed.
+    threshold : float
+        The chi-square quantile ``1 - alpha`` for ``dof`` degrees of freedom.
+    p_value : float
+        Chi-square tail probability of ``statistic``.
+    kept : bool
+        The parameters stayed in the model (``statistic > threshold``).
+    estimate, sigma : tuple of float
+        The tested parameters in the bigger model and their 1-sigma: the gradient (east, north) per km,
+        the range of the knot speeds (max - min) m/s, or the constant correction in ppm.
+    unit : str
+    """
+
+    name: str
+    dof: int
+    statistic: float
+    threshold: float
+    p_value: float
+    kept: bool
+    estimate: tuple[float, ...]
+    sigma: tuple[float, ...]
+    unit: str
+
+    def to_record(self) -> dict:
+        return {
+            "name": self.name,
+            "dof": self.dof,
+            "statistic": float(self.statistic),
+            "threshold": float(self.threshold),
+            "p_value": float(self.p_value),
+            "kept": bool(self.kept),
+            "estimate": [float(v) for v in self.estimate],
+            "sigma": [float(v) for v in self.sigma],
+            "unit": self.unit,
+        }
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -361,6 +422,9 @@ class GnssaArrayResult:
         Unix time of the survey's time 0 (for :attr:`epoch_s` as UTC).
     status : str
         ``ok`` or what went wrong.
+    model_tests : tuple of ModelTest
+        The tests of the model selection (:func:`select_model`; empty when it is off): which of the
+        gradient, the speed's variation in time and its constant scale were kept, with their estimates.
     """
 
     name: str
@@ -403,6 +467,7 @@ class GnssaArrayResult:
     converged: bool
     time_origin_unix_s: float
     status: str = "ok"
+    model_tests: tuple[ModelTest, ...] = ()
 
     @property
     def sigma_enu_m(self) -> FloatArray:
@@ -491,6 +556,7 @@ class GnssaArrayResult:
             "beta_m": float(self.beta_m),
             "converged": bool(self.converged),
             "status": self.status,
+            "model_tests": [t.to_record() for t in self.model_tests],
         }
 
 
@@ -1014,16 +1080,41 @@ def localize_gnssa_array(
         used[remove] = False
         iterations[-1] = dataclasses.replace(iterations[-1], excluded=int(remove.size))
     assert result is not None
-    # bending corrections at the final estimate, one last solve
-    _refresh_bending(problem, x)
-    problem.whiten, gnss_var = _whitening(
-        problem, x, sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2
-    )
-    problem.invalidate()
-    result = solve_map(problem, prior, map_opts, initial=x[None, :])
-    x = result.estimate[0]
-    resid = problem.residual_m(x)
-    sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2)
+
+    def final_solve(setup: _Setup, x: FloatArray, sigma_path: float, beta: float) -> tuple:
+        """Bending corrections at ``x``, one solve; the residuals and their sigmas."""
+        problem = setup.problem
+        _refresh_bending(problem, x)
+        problem.whiten, gnss_var = _whitening(
+            problem, x, sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2
+        )
+        problem.invalidate()
+        result = solve_map(problem, setup.prior, map_opts, initial=x[None, :])
+        x = result.estimate[0]
+        resid = problem.residual_m(x)
+        sigma = np.sqrt(gnss_var + sigma_path**2 + (beta * _tan_incidence(problem, x)) ** 2)
+        return result, x, resid, sigma, gnss_var
+
+    result, x, resid, sigma, gnss_var = final_solve(setup, x, sigma_path, beta)
+    tests: tuple[ModelTest, ...] = ()
+    if opts.select_model:
+
+        def refit(smaller: _Setup, x0: FloatArray) -> tuple[object, FloatArray]:
+            nonlocal sigma_path, beta, resid, sigma
+            out = final_solve(smaller, x0, sigma_path, beta)
+            if opts.estimate_noise:  # the noise of the smaller model, then its solve
+                sigma_path, beta = _variance_components(
+                    out[2][used],
+                    out[4][used],
+                    _tan_incidence(smaller.problem, out[1])[used],
+                    opts.range_dependent_weights,
+                )
+                out = final_solve(smaller, out[1], sigma_path, beta)
+            resid, sigma = out[2], out[3]
+            return out[0], out[1]
+
+        setup, x, result, tests = select_model(setup, x, result, opts, refit)
+        problem = setup.problem
     left = used & (np.abs(resid) > opts.gross_error_m)
     if left.any() and opts.prescreen:
         worst = int(np.argmax(np.where(left, np.abs(resid), 0.0)))
@@ -1032,9 +1123,152 @@ def localize_gnssa_array(
             f"{opts.gross_error_m:g} m (reply {worst}: {resid[worst]:+.1f} m): the survey cannot be solved "
             "reliably; check its travel times, turn-around delays and transponder order"
         )
-    return _result(
+    out = _result(
         survey, opts, setup, result, x, used, resid, sigma, sigma_path, beta, exclusions, iterations
     )
+    return dataclasses.replace(out, model_tests=tests)
+
+
+def select_model(
+    setup: _Setup,
+    x: FloatArray,
+    result: object,
+    opts: GnssaArrayOptions,
+    refit: object,
+) -> tuple[_Setup, FloatArray, object, tuple[ModelTest, ...]]:
+    """Drop the sound-speed and gradient parameters a survey does not support (nested models, chi-square
+    likelihood-ratio tests at level ``opts.selection_alpha``).
+
+    Why: each parameter group costs precision whether or not the ocean needs it. On a short drift-free
+    survey the horizontal gradient, nearly collinear with the horizontal shift when the platform circles
+    the array, multiplies the horizontal scatter (seeded GNATSS oracle surveys of 300 pings: 14 and 22 mm
+    RMS east and north with it, 3 and 2 mm without), and the speed's knots and scale trade with depth.
+    A drifting or stratified ocean leaves a large, unmistakable misfit when they are removed, so the
+    test keeps them there. Tested in order, on the fit of the bigger model:
+
+    1. ``gradient`` (2 parameters: ``g = 0``) and ``sound_speed_variation`` (``K - 1``: all knots equal),
+       each from the full model;
+    2. ``sound_speed_scale`` (1: the constant speed equal to ``c_ref``, the profile as given), on the
+       model refitted without what step 1 dropped, only when the speed is one constant.
+
+    The statistic of a linear constraint ``D x = d`` is ``(D x - d)^T (D P D^T)^{-1} (D x - d)``, ``P``
+    the posterior covariance: for the linearized (Gauss-Newton) model this is exactly the increase of
+    the MAP cost ``-2 log p`` when the constraint is imposed (the likelihood-ratio statistic, eq. of the
+    Wald test). Its distribution when the parameters are truly absent is chi-square with ``dof`` degrees
+    of freedom, or stochastically smaller (the prior shrinks the estimate), so the level is at most
+    ``alpha``. Each drop is followed by ``refit(smaller_setup, x)`` (the noise re-estimated, one solve;
+    the outlier decisions of the full model are kept).
+
+    Returns
+    -------
+    setup, x, result, tests
+        The selected model, its estimate and solve, and the tests (:class:`ModelTest`) in order.
+    """
+    alpha = opts.selection_alpha
+    problem = setup.problem
+    cov = result.covariance[0]  # type: ignore[attr-defined]
+    c_ref = problem.acoustics.c_ref
+    tests: list[ModelTest] = []
+    keep_gradient = problem.gradient
+    speed = "knots" if problem.n_knots > 1 else ("constant" if problem.n_knots == 1 else "fixed")
+    if problem.gradient:
+        cols = np.arange(problem.col_gradient, problem.col_gradient + 2)
+        t = _lr_test("gradient", np.eye(2), x[cols], cov[np.ix_(cols, cols)], alpha, "per_km")
+        tests.append(dataclasses.replace(t, sigma=tuple(np.sqrt(np.diag(cov)[cols]))))
+        keep_gradient = t.kept
+    k0 = problem.first_knot
+    if problem.n_knots > 1:
+        knots = x[k0:]
+        diff = np.diff(np.eye(problem.n_knots), axis=0)  # (K - 1, K): consecutive differences
+        t = _lr_test("sound_speed_variation", diff, knots, cov[k0:, k0:], alpha, "mps")
+        span = float(knots.max() - knots.min())
+        tests.append(
+            dataclasses.replace(t, estimate=(span,), sigma=(float(np.sqrt(np.mean(np.diag(cov)[k0:]))),))
+        )
+        if not t.kept:
+            speed = "constant"
+    if keep_gradient != problem.gradient or (problem.n_knots > 1 and speed == "constant"):
+        setup, x = _reduced(setup, x, keep_gradient, speed, opts.sigma_sound_speed_mps)
+        result, x = refit(setup, x)  # type: ignore[operator]
+    problem = setup.problem
+    if problem.n_knots == 1:
+        k0 = problem.first_knot
+        cov = result.covariance[0]  # type: ignore[attr-defined]
+        t = _lr_test("sound_speed_scale", np.eye(1), x[k0:] - c_ref, cov[k0:, k0:], alpha, "ppm")
+        tests.append(
+            dataclasses.replace(
+                t, estimate=(1e6 * (x[k0] / c_ref - 1.0),), sigma=(1e6 * float(np.sqrt(cov[k0, k0])) / c_ref,)
+            )
+        )
+        if not t.kept:
+            setup, x = _reduced(setup, x, keep_gradient, "fixed", opts.sigma_sound_speed_mps)
+            result, x = refit(setup, x)  # type: ignore[operator]
+    return setup, x, result, tuple(tests)
+
+
+def _lr_test(
+    name: str, constraint: FloatArray, value: FloatArray, cov: FloatArray, alpha: float, unit: str
+) -> ModelTest:
+    """The statistic ``(D v)^T (D C D^T)^{-1} (D v)`` of the constraint ``D v = 0`` and its chi-square
+    verdict at level ``alpha`` (see :func:`select_model`)."""
+    dv = constraint @ value
+    dof = int(constraint.shape[0])
+    stat = float(dv @ np.linalg.solve(constraint @ cov @ constraint.T, dv))
+    threshold = float(stats.chi2.ppf(1.0 - alpha, dof))
+    return ModelTest(
+        name=name,
+        dof=dof,
+        statistic=stat,
+        threshold=threshold,
+        p_value=float(stats.chi2.sf(stat, dof)),
+        kept=stat > threshold,
+        estimate=tuple(float(v) for v in value),
+        sigma=(),
+        unit=unit,
+    )
+
+
+def _reduced(
+    setup: _Setup, x: FloatArray, gradient: bool, speed: str, sigma_speed_mps: float
+) -> tuple[_Setup, FloatArray]:
+    """The nested model without the gradient (``gradient`` False) and with the speed ``knots`` as they
+    are, one ``constant`` (at the mean speed of the used replies, prior ``N(c_ref, sigma_speed^2)``) or
+    ``fixed`` at ``c_ref``; the state ``x`` mapped onto it."""
+    p = setup.problem
+    cols = list(range(p.n_pos))
+    if p.gradient and gradient:
+        cols += [p.col_gradient, p.col_gradient + 1]
+    if p.lever:
+        cols += list(range(p.col_lever, p.col_lever + 3))
+    k0 = p.first_knot
+    if speed == "knots":
+        cols += list(range(k0, k0 + p.n_knots))
+    idx = np.asarray(cols)
+    mean, cov = setup.prior.mean[0][idx], setup.prior.cov[np.ix_(idx, idx)]
+    x_new = x[idx]
+    m = p.twtt_s.size
+    knot_index, knot_weight, n_knots, knots_s = p.knot_index, p.knot_weight, p.n_knots, setup.knots_s
+    if speed == "constant":
+        c_mean = float(np.mean(p.speed(x)[p.mask]))
+        x_new = np.append(x_new, c_mean)
+        mean = np.append(mean, p.acoustics.c_ref)
+        cov = np.pad(cov, ((0, 1), (0, 1)))
+        cov[-1, -1] = sigma_speed_mps**2
+        knot_index, knot_weight = np.zeros(m, dtype=np.int64), np.stack([np.ones(m), np.zeros(m)], axis=1)
+        n_knots, knots_s = 1, setup.knots_s[:1]
+    elif speed == "fixed":
+        knot_index, knot_weight = np.zeros(m, dtype=np.int64), np.zeros((m, 2))
+        n_knots, knots_s = 0, np.zeros(0)
+    problem = dataclasses.replace(
+        p,
+        gradient=p.gradient and gradient,
+        knot_index=knot_index,
+        knot_weight=knot_weight,
+        n_knots=n_knots,
+        _cache={},
+    )
+    prior = GaussianPrior(mean=mean[None, :], cov=cov)
+    return dataclasses.replace(setup, problem=problem, prior=prior, knots_s=knots_s), x_new
 
 
 def _outliers(

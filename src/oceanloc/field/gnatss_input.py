@@ -19,6 +19,7 @@ dataset (:meth:`to_dataset`) and the JSON record (:meth:`to_record`, with its ``
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -531,6 +532,8 @@ def localize_gnatss_input(
         time_origin_unix_s=J2000_UNIX_S,  # GNATSS's times are J2000 seconds: the record's epoch_utc
     )
     opts = options or GnssaArrayOptions(solution=solution)
+    if opts.surface_height_m is None:  # GNATSS's depth zero: the geoid (depth = -orthometric height)
+        opts = dataclasses.replace(opts, surface_height_m=cfg.geoid_undulation_m - origin.h_m)
     profile = (
         None
         if data.profile is None
