@@ -41,7 +41,14 @@ Robustness and uncertainty as in :mod:`oceanloc.estimation.gnssa`: a robust firs
 the outlier rule removes the replies with the largest normalized residual above ``outlier_threshold``
 (up to ``1 + n / 1000`` per round, so ten thousand pings need no thousand solves); a delete-one-block
 jackknife over contiguous time blocks (linearized at the solution: one normal-matrix downdate per
-block) and the survey-wide GNSS error (common to the whole array) are added to the formal covariance.
+block) and the survey-wide GNSS error (common to the whole array; only when the residuals are serially
+correlated, :func:`serial_correlation_test`) are added to the formal covariance.
+
+Model selection (:func:`select_model`, on by default): after the outlier loop the gradient, the
+speed's variation in time and its constant scale are each dropped when their likelihood-ratio
+statistic is below Schwarz's threshold ``dof ln n``, so a short drift-free survey does not pay for
+unused parameters (on the GNATSS oracle's 300-ping surveys the centre error falls from 28 to 4 mm)
+while a drifting one keeps them; the tests are reported (:attr:`GnssaArrayResult.model_tests`).
 Everything is vectorized over replies; the only Python loops run over transponders, rounds and blocks.
 
 Use::
