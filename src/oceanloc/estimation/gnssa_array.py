@@ -67,9 +67,9 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
@@ -1213,7 +1213,7 @@ def select_model(
     def threshold(dof: int) -> float:
         if opts.selection_criterion == "bic":
             return dof * float(np.log(max(n_used, 2)))
-        return float(stats.chi2.ppf(1.0 - opts.selection_alpha, dof))
+        return float(_chi2().ppf(1.0 - opts.selection_alpha, dof))
 
     problem = setup.problem
     cov = result.covariance[0]  # type: ignore[attr-defined]
@@ -1293,18 +1293,25 @@ def serial_correlation_test(
             name="gnss_serial_correlation", dof=0, statistic=float("nan"), threshold=float("nan"),
             p_value=float("nan"), kept=True, estimate=(), sigma=(), unit="",
         )  # fmt: skip
-    threshold = float(stats.chi2.ppf(1.0 - alpha, dof))
+    threshold = float(_chi2().ppf(1.0 - alpha, dof))
     return ModelTest(
         name="gnss_serial_correlation",
         dof=dof,
         statistic=q,
         threshold=threshold,
-        p_value=float(stats.chi2.sf(q, dof)),
+        p_value=float(_chi2().sf(q, dof)),
         kept=q > threshold,
         estimate=(),
         sigma=(),
         unit="",
     )
+
+
+def _chi2() -> Any:
+    """``scipy.stats.chi2``, imported when first needed (the command line starts without scipy)."""
+    from scipy import stats
+
+    return stats.chi2
 
 
 def _lr_test(
@@ -1321,7 +1328,7 @@ def _lr_test(
         dof=dof,
         statistic=stat,
         threshold=limit,
-        p_value=float(stats.chi2.sf(stat, dof)),
+        p_value=float(_chi2().sf(stat, dof)),
         kept=stat > limit,
         estimate=tuple(float(v) for v in value),
         sigma=(),
