@@ -20,6 +20,7 @@ from oceanloc.estimation.gnssa_array import (
     gnatss_like_options,
     hat_pairs,
     localize_gnssa_array,
+    serial_correlation_test,
 )
 from oceanloc.models.sound_profile import SoundSpeedProfile
 from oceanloc.sim.gnssa_array import simulate_gnssa_array
@@ -434,3 +435,110 @@ def test_defaults_beat_fixed_profile_speeds_when_the_ocean_drifts():
     slope_ppm_h = np.polyfit((t - t[0]) / 3600.0, 1e6 * (ours.speed_scale(t) - 1.0), 1)[0]
     assert slope_ppm_h == pytest.approx(150.0, abs=15.0)
     np.testing.assert_allclose(ours.gradient_per_km, [4e-4, -3e-4], atol=2e-4)
+
+
+def _selection_survey(seed: int, **kwargs):
+    rng = np.random.default_rng(seed)
+    return simulate_gnssa_array(rng, positions_enu_m=TRIANGLE, n_pings=300, **kwargs)
+
+
+def test_model_selection_drops_the_unused_parameters_of_a_drift_free_survey():
+    """No drift, no gradient, the sea surface given (the simulation's, height 0): the three nested tests
+    drop the gradient, the knots' variation and the constant scale, each statistic below its BIC
+    threshold ``dof ln n``; the positions are within 3 sigma and closer than the full model's, whose
+    gradient trades with the horizontal position."""
+    survey, truth = _selection_survey(50)
+    opts = GnssaArrayOptions(surface_height_m=0.0)
+    small = localize_gnssa_array(survey, opts, profile=truth.profile)
+    full = localize_gnssa_array(survey, dataclasses.replace(opts, select_model=False), profile=truth.profile)
+    names = [t.name for t in small.model_tests]
+    assert names == ["gradient", "sound_speed_variation", "sound_speed_scale", "gnss_serial_correlation"]
+    n = int(small.used.sum())
+    for t in small.model_tests[:3]:
+        assert t.threshold == pytest.approx(t.dof * np.log(n))
+        assert not t.kept and t.statistic < t.threshold, t
+    assert small.knot_times_s.size == 0 and small.speed_correction_ppm == pytest.approx(0.0, abs=1e-6)
+    np.testing.assert_array_equal(small.gradient_per_km, [0.0, 0.0])
+    # the tested correction is still reported: the constant scale's estimate and sigma, in ppm
+    scale = small.model_tests[2]
+    assert scale.unit == "ppm" and abs(scale.estimate[0]) < 3.0 * scale.sigma[0]
+    err_small = small.positions_enu_m - TRIANGLE
+    err_full = full.positions_enu_m - TRIANGLE
+    assert np.all(np.abs(err_small) < 3.0 * small.sigma_enu_m)
+    assert np.linalg.norm(err_small) < np.linalg.norm(err_full)
+    assert [t.name for t in full.model_tests] == ["gnss_serial_correlation"] and full.knot_times_s.size > 1
+    rec = small.to_record()["model_tests"]
+    assert [r["kept"] for r in rec[:3]] == [False, False, False]
+
+
+def test_model_selection_keeps_a_drift_and_a_gradient():
+    """A drift of 150 ppm per hour and a gradient of (4e-4, -3e-4) per km: both tests keep them, with
+    statistics far above their thresholds, and the gradient is recovered within 3 sigma."""
+    survey, truth = _selection_survey(51, drift_ppm_per_h=150.0, gradient_per_km=(4e-4, -3e-4))
+    res = localize_gnssa_array(survey, GnssaArrayOptions(surface_height_m=0.0), profile=truth.profile)
+    tests = {t.name: t for t in res.model_tests}
+    assert tests["gradient"].kept and tests["gradient"].statistic > 5.0 * tests["gradient"].threshold
+    variation = tests["sound_speed_variation"]
+    assert variation.kept and variation.statistic > 10.0 * variation.threshold
+    assert "sound_speed_scale" not in tests  # the knots stayed: the constant scale is not tested
+    assert res.knot_times_s.size > 1
+    assert np.all(np.abs(res.gradient_per_km - [4e-4, -3e-4]) < 3.0 * res.gradient_sigma_per_km)
+
+
+def test_model_selection_keeps_the_scale_when_the_sea_surface_is_a_guess():
+    """Without ``surface_height_m`` the profile's depth zero defaults to the mean transducer height (1.5 m
+    above the simulation's surface here): an error collinear with depth, absorbed by the constant
+    scale, which is therefore not tested; the BIC and chi-square criteria are both available."""
+    survey, truth = _selection_survey(50)
+    res = localize_gnssa_array(survey, GnssaArrayOptions(), profile=truth.profile)
+    assert [t.name for t in res.model_tests][:2] == ["gradient", "sound_speed_variation"]
+    assert "sound_speed_scale" not in [t.name for t in res.model_tests]
+    assert res.knot_times_s.size == 1
+    lr = localize_gnssa_array(survey, GnssaArrayOptions(selection_criterion="lr"), profile=truth.profile)
+    assert lr.model_tests[0].threshold == pytest.approx(chi2.ppf(0.99, 2))
+    with pytest.raises(ConfigError, match="selection_criterion 'aic' is none of bic, lr"):
+        GnssaArrayOptions(selection_criterion="aic")
+
+
+def test_serial_correlation_test_tells_white_from_correlated_residuals():
+    """Ljung-Box on 10 lags per transponder: white normalized residuals are not flagged, an AR(1) series
+    with coefficient 0.5 (GNSS errors correlated from ping to ping) is, far above the 1 % quantile; too
+    few replies keep the conservative answer (correlated)."""
+    survey, _ = _selection_survey(52)
+    rng = np.random.default_rng(53)
+    m = survey.n_replies
+    used = np.ones(m, dtype=bool)
+    sigma = np.full(m, 0.02)
+    white = serial_correlation_test(survey, 0.02 * rng.standard_normal(m), sigma, used)
+    assert not white.kept and white.dof == 30 and white.statistic < white.threshold
+    ar = np.zeros(m)
+    for j in range(survey.n_transponders):
+        sel = np.flatnonzero(survey.reply_transponder == j)
+        sel = sel[np.argsort(survey.t_transmit_s[survey.reply_ping[sel]], kind="stable")]
+        e = rng.standard_normal(sel.size)
+        for k in range(1, sel.size):
+            e[k] += 0.5 * e[k - 1]
+        ar[sel] = 0.02 * e
+    corr = serial_correlation_test(survey, ar, sigma, used)
+    assert corr.kept and corr.statistic > 5.0 * corr.threshold
+    few = serial_correlation_test(survey, ar, sigma, np.arange(m) < 100)
+    assert few.kept and few.dof == 0
+
+
+def test_gnss_common_mode_follows_the_serial_test_unless_forced():
+    """White GNSS noise (the simulation's): no common-mode term by default; True forces it, and it then
+    adds the mean antenna covariance to the shift."""
+    survey, truth = _selection_survey(50)
+    geometry = ArrayGeometry(positions_enu_m=TRIANGLE + 0.3)
+    auto = localize_gnssa_array(
+        survey, GnssaArrayOptions(solution="common_shift"), profile=truth.profile, geometry=geometry
+    )
+    assert not auto.model_tests[-1].kept and np.all(auto.covariance_gnss_m2 == 0.0)
+    forced = localize_gnssa_array(
+        survey,
+        GnssaArrayOptions(solution="common_shift", gnss_common_mode=True),
+        profile=truth.profile,
+        geometry=geometry,
+    )
+    assert forced.model_tests[-1].name != "gnss_serial_correlation"
+    np.testing.assert_allclose(np.diag(forced.covariance_gnss_m2)[:3], [0.02**2, 0.02**2, 0.04**2], rtol=0.01)

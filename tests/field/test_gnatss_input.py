@@ -42,7 +42,12 @@ def test_both_methods_recover_the_example(example):
     gn = localize_gnatss_input(data, method="gnatss")
     assert np.max(np.abs(gn.positions_enu_m - truth)) < 0.01  # GNATSS's method: 2 mm sigmas
     oc = localize_gnatss_input(data, method="oceanloc", solution="common_shift")
-    assert np.all(np.abs(oc.positions_enu_m - truth) < 3.0 * oc.sigma_enu_m)
+    # horizontally within 3 sigma; vertically the example's travel times are GNATSS's straight ray at the
+    # harmonic-mean speed, from which oceanloc's ray tracing through the same profile puts it 1.3 cm
+    # shallower (13 to 15 mm mean over the oracle's 36 straight-ray surveys): a model difference
+    err = oc.positions_enu_m - truth
+    assert np.all(np.abs(err[:, :2]) < 3.0 * oc.sigma_enu_m[:, :2])
+    assert np.all((err[:, 2] > 0.005) & (err[:, 2] < 0.02)), err
     rec = oc.to_record()
     assert rec["pings"]["reason"].count("") == 600 - rec["replies_excluded"]
 

@@ -22,6 +22,7 @@ dataset (:meth:`to_dataset`) and the JSON record (:meth:`to_record`, with its ``
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -673,6 +674,8 @@ def localize_gnatss_input(
             receive_cov_m2=ak.receive_cov_m2, receive_rotation=ak.receive_rotation,
             lever_arm_body_m=ak.lever_arm_frd_m, lever_arm_cov_m2=ak.lever_arm_cov_m2, **common,
         )  # fmt: skip
+    if opts.surface_height_m is None:  # GNATSS's depth zero: the geoid (depth = -orthometric height)
+        opts = dataclasses.replace(opts, surface_height_m=cfg.geoid_undulation_m - origin.h_m)
     profile = (
         None
         if data.profile is None

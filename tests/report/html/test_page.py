@@ -238,8 +238,9 @@ def test_gnssa_array_one_ellipse_per_transponder_ping_panel_and_checks(sources, 
         f"transponder {i} used" for i in sorted(ids)
     ]
     assert sum(len(line[1]) for line in pings.lines if line[0].startswith("excluded")) == excluded
-    assert rep.series[1].title.startswith("Sound speed at the knots")
-    assert len(rep.series[1].lines[0][1]) == len(rec["details"]["knot_times_s"])
+    # the packaged example is drift free: the model selection dropped the knots, so no sound-speed panel
+    assert rec["details"]["knot_times_s"] == [] and len(rep.series) == 1
+    assert [t["kept"] for t in rec["details"]["model_tests"]][:3] == [False, False, False]
     assert [c.name for c in rep.checks] == [
         "solver converged",
         "replies used vs excluded: at most 5 % excluded",
@@ -251,12 +252,20 @@ def test_gnssa_array_one_ellipse_per_transponder_ping_panel_and_checks(sources, 
     assert page.count('<tr class="check ') == 2 and "outlier" in page
 
 
-def test_gnssa_array_without_knots_has_no_sound_speed_panel(sources):
+def test_gnssa_array_with_knots_has_a_sound_speed_panel(sources):
     from oceanloc.report.html.records import gnssa_array_report
 
     rec = json.loads(sources["gnssa-array"].read_text())
-    rec["details"]["knot_times_s"] = []
-    assert [s.title.split(":")[0] for s in gnssa_array_report(rec).series] == ["Residuals per ping"]
+    t0 = float(rec["details"]["epoch_s"])
+    rec["details"].update(
+        knot_times_s=[t0 - 1800.0, t0, t0 + 1800.0],
+        sound_speed_knots_mps=[1481.0, 1481.5, 1482.0],
+        sound_speed_knot_sigma_mps=[0.2, 0.2, 0.2],
+    )
+    series = gnssa_array_report(rec).series
+    assert series[0].title.startswith("Residuals per ping")
+    assert series[1].title.startswith("Sound speed at the knots")
+    assert len(series[1].lines[0][1]) == 3
 
 
 def test_gnssa_pings_of_unequal_length_are_a_data_error(sources, tmp_path):

@@ -265,4 +265,33 @@ def gnatss_summary_lines(loc: GnatssLocalization) -> list[str]:
         prior_txt = "/".join(f"{v:.4f}" for v in prior or [])
         lines.append(f"lever arm forward, rightward, downward ({what}): {arm} m")
         lines.append(f"lever arm prior sigma {prior_txt} m")
+    tests = loc.extra.get("model_tests") or []
+    if tests:
+        lines.append("model: " + "; ".join(_model_test_text(t) for t in tests))
     return lines
+
+
+_MODEL_TEST_LABELS = {
+    "gradient": "gradient",
+    "sound_speed_variation": "speed variation",
+    "sound_speed_scale": "speed scale",
+    "gnss_serial_correlation": "GNSS common mode",
+}
+
+
+def _model_test_text(t: dict) -> str:
+    """One model-selection test as text: kept or dropped, the statistic against its threshold (and the
+    constant speed correction, in ppm, for the scale test)."""
+    label = _MODEL_TEST_LABELS.get(t["name"], t["name"])
+    verdict = (
+        ("on" if t["kept"] else "off")
+        if t["name"] == "gnss_serial_correlation"
+        else ("kept" if t["kept"] else "dropped")
+    )
+    if t["dof"] == 0:
+        return f"{label} {verdict} (too few replies to test)"
+    value = ""
+    if t["name"] == "sound_speed_scale" and t["estimate"]:
+        value = f"{t['estimate'][0]:+.0f} +- {t['sigma'][0]:.0f} ppm, "
+    sign = ">" if t["kept"] else "<="
+    return f"{label} {verdict} ({value}{t['statistic']:.1f} {sign} {t['threshold']:.1f})"
