@@ -64,7 +64,11 @@ def test_packaged_example_oceanloc_default_and_pxp_tt_input(tmp_path: Path):
     for tp, true in zip(rec["transponders"], truth["transponders_enu_m"], strict=True):
         err = [tp["e_m"] - true[0], tp["n_m"] - true[1], tp["u_m"] - true[2]]
         sig = [tp["sigma_e_m"], tp["sigma_n_m"], tp["sigma_u_m"]]
-        assert all(abs(e) < 3.0 * s for e, s in zip(err, sig, strict=True))  # its sigmas explain its error
+        # Horizontally its sigmas explain its error; vertically the example's travel times are GNATSS's
+        # straight ray at the harmonic-mean speed, which oceanloc's ray tracing through the same profile
+        # puts 1.3 cm shallower (a model difference; see tests/field/test_gnatss_input.py).
+        assert all(abs(e) < 3.0 * s for e, s in zip(err[:2], sig[:2], strict=True))
+        assert 0.005 < err[2] < 0.02, err
 
 
 @pytest.mark.parametrize(
