@@ -4,6 +4,7 @@ subprocess (exit 2, one reason, no traceback)."""
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -106,9 +107,12 @@ def test_packaged_antenna_csv_with_lever_arm_calibration(tmp_path: Path):
         "--estimate-lever-arm", "--json", "o.json", cwd=tmp_path,
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
-    assert "lever arm forward, rightward, downward (estimated): " in res.stdout
-    assert "lever arm prior sigma 1.0000/1.0000/1.0000 m" in res.stdout
-    assert max(len(line) for line in res.stdout.splitlines()) <= 100
+    # each on one line of the 100-column output: the three components with their sigmas, in mm
+    assert re.search(
+        r"^lever arm forward, right, down \(estimated\):( [-\d.]+ \+- [\d.]+,?){3} mm$", res.stdout, re.M
+    )
+    assert "lever arm prior sigma 1000.0/1000.0/1000.0 mm" in res.stdout
+    assert re.search(r"^model: gradient (kept|dropped) \(", res.stdout, re.M)
     rec = json.loads((tmp_path / "o.json").read_text())
     truth = json.loads((folder / "truth.json").read_text())
     d = rec["details"]

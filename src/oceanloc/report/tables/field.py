@@ -258,16 +258,16 @@ def gnatss_summary_lines(loc: GnatssLocalization) -> list[str]:
     prior = loc.extra.get("lever_arm_prior_sigma_m")
     if loc.extra.get("lever_arm_estimated") or (prior and any(v > 0 for v in prior)):
         arm = ", ".join(
-            f"{a:.4f} +- {s:.4f}"
+            f"{1e3 * a:.1f} +- {1e3 * s:.1f}"
             for a, s in zip(loc.extra["lever_arm_body_m"], loc.extra["lever_arm_sigma_m"], strict=True)
         )
         what = "estimated" if loc.extra.get("lever_arm_estimated") else "with its prior"
-        prior_txt = "/".join(f"{v:.4f}" for v in prior or [])
-        lines.append(f"lever arm forward, rightward, downward ({what}): {arm} m")
-        lines.append(f"lever arm prior sigma {prior_txt} m")
+        prior_txt = "/".join(f"{1e3 * v:.1f}" for v in prior or [])
+        lines.append(f"lever arm forward, right, down ({what}): {arm} mm")
+        lines.append(f"lever arm prior sigma {prior_txt} mm")
     tests = loc.extra.get("model_tests") or []
     if tests:
-        lines.append("model: " + "; ".join(_model_test_text(t) for t in tests))
+        lines += [f"model: {_model_test_text(t)}" for t in tests]
     return lines
 
 
