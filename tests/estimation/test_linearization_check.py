@@ -89,3 +89,32 @@ def test_invalid_band_and_confidence_raise():
         range_linearization_check(*args, 0.1, np.zeros((1, 3)), np.eye(3), confidence=1.5)
     with pytest.raises(ConfigError, match="band"):
         range_linearization_check(*args, 0.1, np.zeros((1, 3)), np.eye(3), band=(1.5, 2.0))
+
+
+def test_ratios_are_the_cost_evaluated_point_by_point():
+    """The expanded distances (``|p - s|^2 + 2 D.(p - s) + |D|^2``) against the cost evaluated directly at
+    each sigma point, on poor and good geometries, some ranges unused: ratios equal to 1e-9."""
+    rng = np.random.default_rng(12)
+    b, n, d = 6, 40, 3
+    sensors = rng.normal(0.0, [5.0, 5.0, 0.1], (b, n, d))
+    sensors[:3] *= [[[0.05, 1.0, 1.0]]]  # nearly collinear tracks
+    p = rng.normal(0.0, [10.0, 10.0, 1.0], (b, d)) + np.array([0.0, 0.0, -20.0])
+    ranges = np.linalg.norm(sensors - p[:, None], axis=-1) + rng.normal(0, SIGMA, (b, n))
+    used = rng.random((b, n)) > 0.2
+    cov = np.stack([np.diag(rng.uniform(0.01, 4.0, d)) for _ in range(b)])
+    mean, p_cov = p + 1.0, np.diag(PRIOR_SIGMA**2)
+    check = range_linearization_check(p, cov, sensors, ranges, used, SIGMA, mean, p_cov)
+    c = np.sqrt(stats.chi2.ppf(0.95, d))
+    info_prior = np.linalg.inv(p_cov)
+
+    def cost(k, x):
+        r = (ranges[k] - np.linalg.norm(x - sensors[k], axis=1))[used[k]] / SIGMA
+        return 0.5 * r @ r + 0.5 * (x - mean[k]) @ info_prior @ (x - mean[k])
+
+    for k in range(b):
+        lam, vec = np.linalg.eigh(cov[k])
+        los = (p[k] - sensors[k])[used[k]] / np.linalg.norm(p[k] - sensors[k], axis=1)[used[k], None]
+        info = los.T @ los / SIGMA**2 + info_prior
+        steps = [s * c * np.sqrt(lam[j]) * vec[:, j] for s in (1.0, -1.0) for j in range(d)]
+        want = [(cost(k, p[k] + dx) - cost(k, p[k])) / (0.5 * dx @ info @ dx) for dx in steps]
+        np.testing.assert_allclose(check.ratio[k], want, rtol=1e-9)

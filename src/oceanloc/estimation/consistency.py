@@ -269,13 +269,22 @@ def range_linearization_check(
     axes = c * np.sqrt(np.maximum(lam, 0.0))[:, None, :] * vec  # (B, d, d): column j = c sqrt(l_j) v_j
     delta = np.concatenate([np.swapaxes(axes, 1, 2), -np.swapaxes(axes, 1, 2)], axis=1)  # (B, 2d, d)
     pts = np.concatenate([p[:, None, :], p[:, None, :] + delta], axis=1)  # (B, 1 + 2d, d)
-    dist = np.linalg.norm(pts[:, :, None, :] - sensors[:, None, :, :], axis=-1)  # (B, 1 + 2d, n)
+    # |p + D - s|^2 = |p - s|^2 + 2 D.(p - s) + |D|^2: one (n, d) x (d, 2d) product per batch instead of
+    # the (1 + 2d, n, d) differences.
+    rel = p[:, None, :] - sensors  # (B, n, d)
+    d0_sq = np.einsum("bni,bni->bn", rel, rel)
+    cross = delta @ np.swapaxes(rel, 1, 2)  # (B, 2d, n)
+    step_sq = np.einsum("bci,bci->bc", delta, delta)[:, :, None]
+    d0 = np.sqrt(d0_sq)
+    dist = np.concatenate(
+        [d0[:, None, :], np.sqrt(np.maximum(d0_sq[:, None, :] + 2.0 * cross + step_sq, 0.0))], axis=1
+    )  # (B, 1 + 2d, n)
     resid = (z[:, None, :] - dist) * w[:, None, :]
     dev = pts - p0[:, None, :]
     cost = 0.5 * np.sum(resid**2, axis=-1) + 0.5 * np.einsum("bci,bij,bcj->bc", dev, prior_info, dev)
-    los = (p[:, None, :] - sensors) / np.maximum(dist[:, :1, :].transpose(0, 2, 1), 1e-12)
+    los = rel / np.maximum(d0[:, :, None], 1e-12)
     jac = los * w[..., None]
-    info = np.einsum("bni,bnj->bij", jac, jac) + prior_info
+    info = np.swapaxes(jac, 1, 2) @ jac + prior_info
     predicted = 0.5 * np.einsum("bci,bij,bcj->bc", delta, info, delta)
     ratio = (cost[:, 1:] - cost[:, :1]) / np.maximum(predicted, 1e-300)
     statistic = np.max(np.abs(np.log(np.maximum(ratio, 1e-300))), axis=1)
