@@ -222,8 +222,8 @@ def _report_gnatss(
         err_console.print(escape(str(loc.extra["qc"])), highlight=False)
     console.print(tables.gnatss_positions_table(loc))
     console.print(tables.gnatss_geodetic_table(loc))
-    for line in tables.gnatss_summary_lines(loc):
-        console.print(escape(line), highlight=False)
+    for line in tables.gnatss_summary_lines(loc):  # each a line, never wrapped (grep-able)
+        console.print(escape(line), highlight=False, soft_wrap=True)
     if show:
         for t, k, r, x in zip(loc.t_s, loc.transponder, loc.reason, loc.excluded, strict=True):
             if x:
