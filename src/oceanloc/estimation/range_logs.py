@@ -650,6 +650,7 @@ def correlated_fit(
     linearize_at: FloatArray | None = None,
     first_pass: list[FloatArray] | None = None,
     warm_start: bool = False,
+    last_start_m: FloatArray | None = None,
 ) -> MapResult:
     """The generalized least-squares MAP estimate on the used ranges with the Gauss-Markov GPS error
     (module docstring): ``passes`` solves, each with the covariance at the previous estimate's lines of
@@ -660,7 +661,10 @@ def correlated_fit(
     With ``warm_start`` (``initial_m`` the previous call's first-pass estimate, a few millimetres
     away) the passes are Newton steps instead of :func:`solve_map`: one for the first pass (it lands
     within the square of that distance), to convergence (``delta_min_m``) for the last, falling back to
-    the solver where a step is longer than :data:`WARM_STEP_M`."""
+    the solver where a step is longer than :data:`WARM_STEP_M`. ``last_start_m``: with ``warm_start``,
+    where the last pass starts (the previous call's result, a few millimetres from this one's) instead
+    of the previous pass's estimate (which the change of linearization point can move by decimetres);
+    the pass's problem, linearized at the previous pass's estimate, is the same either way."""
     x = np.asarray(initial_m, dtype=float).reshape(1, 3)
     point = x[0] if linearize_at is None else np.asarray(linearize_at, dtype=float).reshape(3)
     res = problem = None
@@ -678,7 +682,13 @@ def correlated_fit(
         )
         warm = None
         if warm_start:
-            warm = _newton(problem, x, prior, prior_info, options, 1 if k < passes - 1 else 4)
+            last = k == passes - 1
+            start = (
+                np.asarray(last_start_m, dtype=float).reshape(1, 3)
+                if last and last_start_m is not None
+                else x
+            )
+            warm = _newton(problem, start, prior, prior_info, options, 4 if last else 1)
         if warm is not None:
             x, res = warm
         else:

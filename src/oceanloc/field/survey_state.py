@@ -389,7 +389,7 @@ class SurveyState:
                 initial_m=white if tr.fresh or tr.first_pass_m is None else tr.first_pass_m,
                 sigma_range_m=s.sigma_range_m, sigma_gps_m=gps, gps_correlation_s=s.gps_correlation_s,
                 linearize_at=white, first_pass=first,
-                warm_start=not (tr.fresh or tr.first_pass_m is None),
+                warm_start=not (tr.fresh or tr.first_pass_m is None), last_start_m=tr.position_m,
             )  # fmt: skip
         else:  # white GPS error: the white solve on the final mask is the estimate
             res = robust_white_fit(
