@@ -144,3 +144,20 @@ def test_ecef_positions_and_covariances_rotate_to_enu():
     enu_cov = ecef_covariance_to_enu_m2(cov, origin)
     np.testing.assert_allclose(enu_cov, r @ cov @ r.T)
     assert np.trace(enu_cov) == pytest.approx(np.trace(cov))
+
+
+def test_enu_rotations_batched_are_the_origins_one_by_one():
+    """``enu_rotation_at`` over a batch of points (poles and the antimeridian included) equals
+    ``enu_rotation`` at each, and maps small ECEF displacements to pymap3d's ENU ones."""
+    from oceanloc.geo.ecef import enu_rotation_at
+
+    lat = np.array([[89.9, -45.0, 0.0], [32.87, 60.0, -89.9]])
+    lon = np.array([[0.0, 179.9, -180.0], [-117.27, 350.0, 10.0]])
+    rot = enu_rotation_at(lat, lon)
+    assert rot.shape == (2, 3, 3, 3)
+    d = np.array([0.3, -0.2, 0.1])
+    for idx in np.ndindex(lat.shape):
+        origin = EnuOrigin(lat_deg=float(lat[idx]), lon_deg=float(lon[idx]), h_m=0.0)
+        np.testing.assert_allclose(rot[idx], enu_rotation(origin), atol=1e-15)
+        xyz = enu_to_ecef_m(np.zeros(3), origin)
+        np.testing.assert_allclose(ecef_to_enu_m(xyz + d, origin), rot[idx] @ d, atol=1e-6)

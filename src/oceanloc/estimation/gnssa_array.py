@@ -66,6 +66,7 @@ Use::
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -80,7 +81,13 @@ from oceanloc.estimation.gnssa import (
     hat_basis,
     robust_first_fit,
 )
-from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, NormalEquations, solve_map
+from oceanloc.estimation.map_gauss_newton import (
+    GaussianPrior,
+    MapOptions,
+    MapResult,
+    NormalEquations,
+    solve_map,
+)
 from oceanloc.geo.enu import enu_to_geodetic
 from oceanloc.io.gnssa import GPS_EPOCH_2020_UNIX_S
 from oceanloc.io.gnssa_array import GnssaArraySurvey
@@ -1130,7 +1137,7 @@ def localize_gnssa_array(
     tests: tuple[ModelTest, ...] = ()
     if opts.select_model:
 
-        def refit(smaller: _Setup, x0: FloatArray) -> tuple[object, FloatArray]:
+        def refit(smaller: _Setup, x0: FloatArray) -> tuple[MapResult, FloatArray]:
             nonlocal sigma_path, beta, resid, sigma
             out = final_solve(smaller, x0, sigma_path, beta)
             if opts.estimate_noise:  # the noise of the smaller model, then its solve
@@ -1167,10 +1174,10 @@ def localize_gnssa_array(
 def select_model(
     setup: _Setup,
     x: FloatArray,
-    result: object,
+    result: MapResult,
     opts: GnssaArrayOptions,
-    refit: object,
-) -> tuple[_Setup, FloatArray, object, tuple[ModelTest, ...]]:
+    refit: Callable[[_Setup, FloatArray], tuple[MapResult, FloatArray]],
+) -> tuple[_Setup, FloatArray, MapResult, tuple[ModelTest, ...]]:
     """Drop the sound-speed and gradient parameters a survey does not support (nested models compared by
     their likelihood ratio against Schwarz's criterion, BIC, or a chi-square level).
 
@@ -1217,7 +1224,7 @@ def select_model(
         return float(_chi2().ppf(1.0 - opts.selection_alpha, dof))
 
     problem = setup.problem
-    cov = result.covariance[0]  # type: ignore[attr-defined]
+    cov = result.covariance[0]
     c_ref = problem.acoustics.c_ref
     tests: list[ModelTest] = []
     keep_gradient = problem.gradient
@@ -1240,11 +1247,11 @@ def select_model(
             speed = "constant"
     if keep_gradient != problem.gradient or (problem.n_knots > 1 and speed == "constant"):
         setup, x = _reduced(setup, x, keep_gradient, speed, opts.sigma_sound_speed_mps)
-        result, x = refit(setup, x)  # type: ignore[operator]
+        result, x = refit(setup, x)
     problem = setup.problem
     if problem.n_knots == 1 and opts.surface_height_m is not None:
         k0 = problem.first_knot
-        cov = result.covariance[0]  # type: ignore[attr-defined]
+        cov = result.covariance[0]
         t = _lr_test("sound_speed_scale", np.eye(1), x[k0:] - c_ref, cov[k0:, k0:], threshold, "ppm")
         tests.append(
             dataclasses.replace(
@@ -1253,7 +1260,7 @@ def select_model(
         )
         if not t.kept:
             setup, x = _reduced(setup, x, keep_gradient, "fixed", opts.sigma_sound_speed_mps)
-            result, x = refit(setup, x)  # type: ignore[operator]
+            result, x = refit(setup, x)
     return setup, x, result, tuple(tests)
 
 
@@ -1316,14 +1323,19 @@ def _chi2() -> Any:
 
 
 def _lr_test(
-    name: str, constraint: FloatArray, value: FloatArray, cov: FloatArray, threshold: object, unit: str
+    name: str,
+    constraint: FloatArray,
+    value: FloatArray,
+    cov: FloatArray,
+    threshold: Callable[[int], float],
+    unit: str,
 ) -> ModelTest:
     """The statistic ``(D v)^T (D C D^T)^{-1} (D v)`` of the constraint ``D v = 0`` against
     ``threshold(dof)`` (see :func:`select_model`)."""
     dv = constraint @ value
     dof = int(constraint.shape[0])
     stat = float(dv @ np.linalg.solve(constraint @ cov @ constraint.T, dv))
-    limit = float(threshold(dof))  # type: ignore[operator]
+    limit = float(threshold(dof))
     return ModelTest(
         name=name,
         dof=dof,

@@ -35,6 +35,7 @@ from oceanloc._typing import BoolArray, FloatArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.gnatss_compat import GnatssSettings, GnatssSolution, apriori_xyz_m, gnatss_solve
 from oceanloc.estimation.gnssa_array import ArrayGeometry, GnssaArrayOptions, localize_gnssa_array
+from oceanloc.geo.ecef import ecef_to_enu_m, enu_rotation
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic
 from oceanloc.io.antenna_csv import AntennaCsv, is_antenna_csv, read_antenna_csv
 from oceanloc.io.gnatss import (
@@ -187,8 +188,8 @@ def antenna_pings(
         ant_t, ant_xyz = antenna.t_s, antenna.xyz_m
         ant_cov_xyz = np.einsum("ki,ij->kij", antenna.sigma_xyz_m**2, np.eye(3))
         att_t, att_deg, att_path = attitude.t_s, attitude.rph_deg, attitude.path
-    rot = _ecef_to_enu_rotation(origin)
-    ant_enu = _enu(ant_xyz, origin)
+    rot = enu_rotation(origin)
+    ant_enu = ecef_to_enu_m(ant_xyz, origin)
     ant_cov = rot @ ant_cov_xyz @ rot.T
     t_tx = travel.t_transmit_s
     t_rx = t_tx[:, None] + np.nan_to_num(travel.twtt_s)
@@ -235,18 +236,6 @@ def antenna_pings(
         lever_arm_cov_m2=np.zeros((3, 3)) if lever_arm_cov_m2 is None else np.asarray(lever_arm_cov_m2),
     )  # fmt: skip
     return pings, replies
-
-
-def transducer_pings_from_antenna(
-    travel: PxpTravelTimes,
-    antenna: AntennaPositions | AntennaCsv,
-    attitude: Attitude | None,
-    ids: tuple[str, ...],
-    lever_arm_frd_m: FloatArray,
-    origin: EnuOrigin,
-) -> ArrayPings:
-    """The transducer positions of :func:`antenna_pings` (Earth-fixed, with the antenna's covariance)."""
-    return antenna_pings(travel, antenna, attitude, ids, lever_arm_frd_m, origin)[0]
 
 
 def load_gnatss_input(
@@ -594,19 +583,6 @@ def _unit_of(key: str) -> str:
     return "1"
 
 
-def _ecef_to_enu_rotation(origin: EnuOrigin) -> FloatArray:
-    lat, lon = np.radians(origin.lat_deg), np.radians(origin.lon_deg)
-    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
-    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
-
-
-def _enu(xyz: FloatArray, origin: EnuOrigin) -> FloatArray:
-    e, n, u = pymap3d.ecef2enu(
-        xyz[..., 0], xyz[..., 1], xyz[..., 2], origin.lat_deg, origin.lon_deg, origin.h_m
-    )
-    return np.stack([e, n, u], axis=-1)
-
-
 def localize_gnatss_input(
     data: GnatssInput,
     *,
@@ -630,7 +606,7 @@ def localize_gnatss_input(
         raise ConfigError(f"solution must be one of {', '.join(SOLUTIONS)}, got {solution!r}")
     cfg = data.config
     origin = cfg.array_center
-    apriori_enu = _enu(apriori_xyz_m(cfg), origin)
+    apriori_enu = ecef_to_enu_m(apriori_xyz_m(cfg), origin)
     p = data.pings
     ant = data.antenna
     opts = options or GnssaArrayOptions(solution=solution)
@@ -649,7 +625,7 @@ def localize_gnatss_input(
     deleted = in_windows(p.t_transmit_s, data.deletions)
     keep = ~deleted
     pk = p.select(keep)
-    rot = _ecef_to_enu_rotation(origin)
+    rot = enu_rotation(origin)
     t_unique, first, ping = np.unique(pk.t_transmit_s, return_index=True, return_inverse=True)
     common = {
         "name": Path(p.path).name, "t_transmit_s": t_unique, "reply_ping": ping,
@@ -660,9 +636,9 @@ def localize_gnatss_input(
     }  # fmt: skip
     if ant is None:
         survey = array_survey_from_transducers(
-            transmit_enu_m=_enu(pk.transmit_xyz_m[first], origin),
+            transmit_enu_m=ecef_to_enu_m(pk.transmit_xyz_m[first], origin),
             transmit_cov_m2=rot @ pk.transmit_cov_m2[first] @ rot.T,
-            receive_enu_m=_enu(pk.receive_xyz_m, origin),
+            receive_enu_m=ecef_to_enu_m(pk.receive_xyz_m, origin),
             receive_cov_m2=rot @ pk.receive_cov_m2 @ rot.T,
             **common,
         )
@@ -729,9 +705,9 @@ def localize_gnatss_input(
 def _from_gnatss(sol: GnatssSolution, data: GnatssInput, apriori_enu: FloatArray) -> GnatssLocalization:
     origin = data.config.array_center
     m = len(sol.ids)
-    rot = _ecef_to_enu_rotation(origin)
+    rot = enu_rotation(origin)
     cov = np.broadcast_to(rot @ sol.covariance_xyz_m2 @ rot.T, (m, 3, 3)).copy()
-    pos = _enu(sol.position_xyz_m, origin)
+    pos = ecef_to_enu_m(sol.position_xyz_m, origin)
     geo = np.stack([enu_to_geodetic(pos[k], origin) for k in range(m)])
     p = data.pings
     c = sol.sound_speed_mps[p.transponder]

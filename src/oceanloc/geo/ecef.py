@@ -15,12 +15,20 @@ from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.geo.enu import EnuOrigin
 
 
+def enu_rotation_at(lat_deg: ArrayLike, lon_deg: ArrayLike) -> FloatArray:
+    """The rotations taking ECEF vectors to (E, N, U) at geodetic latitudes and longitudes (degrees),
+    ``(..., 3, 3)``: rows the local east, north and up unit vectors in ECEF (the transpose takes ENU
+    vectors to ECEF)."""
+    lat, lon = np.deg2rad(np.asarray(lat_deg, dtype=float)), np.deg2rad(np.asarray(lon_deg, dtype=float))
+    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    z = np.zeros_like(sl * so)
+    rows = [[-so, co, z], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
+    return np.stack([np.stack(np.broadcast_arrays(*r), axis=-1) for r in rows], axis=-2)
+
+
 def enu_rotation(origin: EnuOrigin) -> FloatArray:
     """The rotation taking ECEF vectors to (E, N, U) at the origin, ``(3, 3)``."""
-    lat, lon = np.deg2rad(origin.lat_deg), np.deg2rad(origin.lon_deg)
-    sl, cl = np.sin(lat), np.cos(lat)
-    so, co = np.sin(lon), np.cos(lon)
-    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
+    return enu_rotation_at(origin.lat_deg, origin.lon_deg)
 
 
 def ecef_to_enu_m(xyz_m: ArrayLike, origin: EnuOrigin) -> FloatArray:

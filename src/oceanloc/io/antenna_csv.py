@@ -47,6 +47,7 @@ import pymap3d
 
 from oceanloc._typing import FloatArray, IntArray
 from oceanloc.errors import ConfigError, DataError
+from oceanloc.geo.ecef import enu_rotation_at
 from oceanloc.io.gnatss import EARTH_RADIUS_RANGE_M, J2000_EPOCH, J2000_UNIX_S, datetime_from_j2000
 from oceanloc.io.qc import HEIGHT_RANGE_M, QcReport, read_lines
 
@@ -130,15 +131,6 @@ class AntennaCsv:
     line: IntArray
     forms: tuple[str, str, str]
     qc: QcReport
-
-
-def enu_to_ecef_rotation(lat_deg: FloatArray, lon_deg: FloatArray) -> FloatArray:
-    """``(..., 3, 3)`` matrices whose columns are the local east, north, up unit vectors in ECEF."""
-    lat, lon = np.radians(np.asarray(lat_deg, float)), np.radians(np.asarray(lon_deg, float))
-    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
-    z = np.zeros_like(lat)
-    rows = [[-so, -sl * co, cl * co], [co, -sl * so, cl * so], [z, cl, sl]]
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def _leap_unix_s() -> tuple[tuple[float, int], ...]:
@@ -406,7 +398,7 @@ def _convert(a: FloatArray, pos_form: str, cov_form: str) -> tuple[FloatArray, F
             lambda i: f"covariance is not positive definite (smallest eigenvalue {eig[i, 0]:.3g} m^2)",
         )
     if cov_form.endswith("enu"):
-        rot = enu_to_ecef_rotation(lat_c, lon_c)
+        rot = np.swapaxes(enu_rotation_at(lat_c, lon_c), -1, -2)
         cov = rot @ local @ np.swapaxes(rot, -1, -2)
     else:
         cov = local
@@ -452,7 +444,7 @@ def write_antenna_csv(
     cov = np.asarray(cov_xyz_m2, dtype=float)
     lat, lon, h = pymap3d.ecef2geodetic(xyz[:, 0], xyz[:, 1], xyz[:, 2])
     if covariance.endswith("enu"):
-        rot = enu_to_ecef_rotation(lat, lon)
+        rot = np.swapaxes(enu_rotation_at(lat, lon), -1, -2)
         cov = np.swapaxes(rot, -1, -2) @ cov @ rot
     cols = [_TIME_OF_FORM[time], *_POSITION_OF_FORM[position], *_COVARIANCE_OF_FORM[covariance]]
     if rph_deg is not None:

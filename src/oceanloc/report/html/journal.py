@@ -65,14 +65,10 @@ def range_geometry(
     return aligned, has, residual, segs
 
 
-def journal_report(path: str | Path) -> Report:
-    """The report of the journal at ``path`` (see the module docstring)."""
-    records, settings, meta = read_journal(path)
-    est = survey_estimates(records, settings)
-    aligned, has, residual, segs = range_geometry(records, settings, est)
-    status = est.range_status[aligned.line]
-
-    estimates = tuple(
+def beacon_markers(est: SurveyEstimates) -> tuple[Estimate, ...]:
+    """Each estimated beacon as a map marker with its 95 % ellipse (east-north metres) and a detail line:
+    latitude, longitude, ranges used and excluded (the journal report and the live page)."""
+    return tuple(
         Estimate(
             label=f"beacon {b}",
             east_m=float(est.positions_enu_m[i, 0]),
@@ -85,6 +81,16 @@ def journal_report(path: str | Path) -> Report:
         )
         for i, b in enumerate(est.beacons)
     )
+
+
+def journal_report(path: str | Path) -> Report:
+    """The report of the journal at ``path`` (see the module docstring)."""
+    records, settings, meta = read_journal(path)
+    est = survey_estimates(records, settings)
+    aligned, has, residual, segs = range_geometry(records, settings, est)
+    status = est.range_status[aligned.line]
+
+    estimates = beacon_markers(est)
     planned = np.zeros((0, 2))
     plan_note = ""
     try:

@@ -55,7 +55,7 @@ from oceanloc.io.journal import (
     heading_problem,
     range_problem,
 )
-from oceanloc.report.html.journal import range_geometry
+from oceanloc.report.html.journal import beacon_markers, range_geometry
 from oceanloc.report.html.model import Estimate, MapLayers, Series
 from oceanloc.report.html.page import (
     CSP,
@@ -331,18 +331,7 @@ class _Live:
             origin = est.origin
             _, _, _, segs = range_geometry(records, self.settings, est)
             layers_kw["range_segments_en_m"] = segs[-MAX_RANGE_SEGMENTS:]
-            estimates = tuple(
-                Estimate(
-                    label=f"beacon {b}",
-                    east_m=float(est.positions_enu_m[i, 0]),
-                    north_m=float(est.positions_enu_m[i, 1]),
-                    semi_major_m=float(est.ellipses.semi_major_m[i]),
-                    semi_minor_m=float(est.ellipses.semi_minor_m[i]),
-                    angle_rad=float(est.ellipses.angle_rad[i]),
-                    detail=f"{est.ranges_used[i]} ranges used, {est.ranges_excluded[i]} excluded",
-                )
-                for i, b in enumerate(est.beacons)
-            )
+            estimates = beacon_markers(est)
             t_ms = float(records.fix_t_unix_s[-1]) * 1000.0
             sigma = np.column_stack(
                 [np.full(est.n_beacons, t_ms), est.beacons.astype(float), est.ellipses.semi_major_m]
