@@ -285,7 +285,7 @@ def live_rig(
             feeder = NmeaFeeder(master, boat, proj, gps_noise_m, seed + 2)
             feeder.start()
             stack.callback(feeder.stop.set)
-            _wait_listening(gport, proc)
+            wait_listening(gport, proc)
             position_spec = f"gpsd://{LOOPBACK}:{gport}"
         yield Rig(
             boat=boat, beacons=sim, proj=proj, vehicle_spec=f"udp://{LOOPBACK}:{vport}",
@@ -308,11 +308,14 @@ def _end(proc: subprocess.Popen, master: int, slave: int) -> None:
             os.close(fd)
 
 
-def _wait_listening(port: int, proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
+def wait_listening(port: int, proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
+    """Until gpsd (``proc``) accepts TCP connections on the loopback ``port``; fails the test, with the
+    end of its output where it was captured, if it exits or does not listen in time."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if proc.poll() is not None:
-            pytest.fail(f"gpsd exited with {proc.returncode}")
+            out = proc.stdout.read() if proc.stdout else ""
+            pytest.fail(f"gpsd exited with {proc.returncode}: {out[-500:]}")
         try:
             socket.create_connection((LOOPBACK, port), timeout=0.2).close()
             return

@@ -23,8 +23,8 @@ from oceanloc.io.gpsd import GpsdClient, GpsdReportParser, read_gpsd_lines
 from oceanloc.io.nmea import GpsFix, Heading, format_gga, format_hdt, format_zda
 from oceanloc.io.qc import QcReport
 from oceanloc.io.streams import open_position_stream
+from tests.field._live_rig import LOOPBACK, free_port, wait_listening
 
-LOOPBACK = "127.0.0.1"
 NEEDS_GPSD = pytest.mark.skipif(
     shutil.which("gpsd") is None, reason="gpsd is not installed (apt-get install gpsd gpsd-clients)"
 )
@@ -87,26 +87,6 @@ def test_heights_headings_and_time_order():
 # ------------------------------------------------------------------------------------- the real daemon
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind((LOOPBACK, 0))
-        return s.getsockname()[1]
-
-
-def _wait_listening(port: int, proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            out = proc.stdout.read() if proc.stdout else ""
-            pytest.fail(f"gpsd exited with {proc.returncode}: {out[-500:]}")
-        try:
-            socket.create_connection((LOOPBACK, port), timeout=0.2).close()
-            return
-        except OSError:
-            time.sleep(0.05)
-    pytest.fail(f"gpsd did not listen on {LOOPBACK}:{port} within {timeout_s} s")
-
-
 def _no_fix_gga(t: dt.datetime) -> str:
     fields = (t.strftime("%H%M%S.00"), "", "", "", "", "0", "00", "99.99", "", "", "", "", "", "")
     return str(pynmea2.GGA("GP", "GGA", fields))
@@ -145,7 +125,7 @@ class _NmeaFeeder(threading.Thread):
 def gpsd_on_a_pty():
     master, slave = os.openpty()
     tty.setraw(slave)
-    port = _free_port()
+    port = free_port(socket.SOCK_STREAM)
     # -N foreground, -n poll the device without waiting for a client, -b read-only (never write to the
     # "receiver"), -S the port; gpsd listens on loopback only unless given -G.
     proc = subprocess.Popen(
@@ -155,7 +135,7 @@ def gpsd_on_a_pty():
         text=True,
     )
     try:
-        _wait_listening(port, proc)
+        wait_listening(port, proc)
         yield master, port
     finally:
         proc.terminate()
@@ -212,7 +192,7 @@ def test_real_gpsd_going_away_is_a_data_error(gpsd_on_a_pty):
     assert client.read(0.3) is None  # no receiver data yet: None at the timeout, not a hang
     client.close()
     with pytest.raises(DataError, match="cannot connect"):
-        GpsdClient(LOOPBACK, _free_port(), connect_timeout_s=1.0)
+        GpsdClient(LOOPBACK, free_port(socket.SOCK_STREAM), connect_timeout_s=1.0)
 
 
 def _rmc(t: dt.datetime, lat_deg: float, lon_deg: float) -> str:
@@ -239,7 +219,7 @@ def test_gpsfake_replays_a_recorded_file(tmp_path: Path):
             f"{format_gga(t, lat, -117.236, -1.478)}\r\n{_rmc(t, lat, -117.236)}\r\n" for t, lat in epochs
         )
     )
-    port = _free_port()
+    port = free_port(socket.SOCK_STREAM)
     proc = subprocess.Popen(
         ["gpsfake", "-1", "-q", "-c", "0.02", "-P", str(port), str(log)],
         stdout=subprocess.PIPE,
