@@ -15,7 +15,7 @@ PACKAGE = Path(oceanloc.__file__).parent
 DOCS = PACKAGE.parents[1] / "docs" / "architecture.md"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_typing", "_version", "units", "errors", "_random", "data"),
+    ("_typing", "_version", "units", "errors", "_random", "_validate", "data"),
     ("geo",),
     ("models",),
     ("io",),

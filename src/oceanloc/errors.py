@@ -16,5 +16,10 @@ class ConfigError(OceanlocError, ValueError):
     """A scenario or option value is missing, malformed or out of range."""
 
 
+class ArgumentError(ConfigError):
+    """An argument of a public function is malformed (shape, NaN, infinity), out of its allowed range or
+    too large to allocate; the message names the argument and the range."""
+
+
 class DataError(OceanlocError, ValueError):
     """An input data file cannot be read or holds no usable records."""

@@ -110,9 +110,9 @@ def test_masked_measurements_are_ignored():
 def test_bad_inputs_raise_config_errors():
     with pytest.raises(ConfigError, match="delta_min_m"):
         MapOptions(delta_min_m=0.0)
-    with pytest.raises(ConfigError, match="standard deviations"):
+    with pytest.raises(ConfigError, match=r"sigma_m: -1 is outside the allowed range \[1e-06, 1e\+06\] m"):
         RangeProblem.build(TABLE_I, np.ones(4), -1.0)
-    with pytest.raises(ConfigError, match="sensor_m has shape"):
+    with pytest.raises(ConfigError, match="sensor_m: shape"):
         RangeProblem.build(np.zeros((3, 3)), np.ones((1, 4)), 1.0)
 
 

@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, FloatArray
+from oceanloc.errors import ArgumentError
 from oceanloc.estimation.gaussian import symmetrize
 
 _SINGULAR_RTOL = 1e-12
@@ -124,11 +126,20 @@ def pcrlb(
     (T, n, n) float
         Bound covariances ``J_k^-1``.
     """
-    f = np.asarray(transition, dtype=float)
-    q = np.asarray(process_noise, dtype=float)
-    info = np.asarray(information, dtype=float)
+    cov = _validate.covariances("initial_cov", initial_cov)
+    n = cov.shape[-1]
+    if cov.ndim != 2:
+        raise ArgumentError(f"initial_cov: shape {cov.shape}, expected (n, n)")
+    f = _validate.float_array("transition", transition, shape=(n, n), max_abs=_validate.MAX_VARIANCE)
+    q = _validate.covariances("process_noise", process_noise, dim=n)
+    if q.ndim != 2:
+        raise ArgumentError(f"process_noise: shape {q.shape}, expected ({n}, {n})")
+    info = _validate.float_array("information", information, shape=(None, n, n), allow_empty=True)
+    if info.size:
+        _validate.covariances("information", info, dim=n, max_variance=_validate.MAX_INFORMATION)
+    if np.linalg.eigvalsh(cov)[0] <= 0.0:
+        raise ArgumentError("initial_cov: not positive definite (the bound starts from its inverse)")
     bound = np.empty_like(info)
-    cov = np.asarray(initial_cov, dtype=float)
     for k in range(info.shape[0]):
         prior_cov = symmetrize(f @ cov @ f.T + q)
         j = symmetrize(np.linalg.inv(prior_cov) + info[k])

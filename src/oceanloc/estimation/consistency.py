@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ArgumentError, ConfigError
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -67,7 +68,15 @@ def confidence_ellipse(center_m: ArrayLike, cov_m2: ArrayLike, confidence: float
         Covariances (the upper-left block of eq. 22 for east-north), square metres.
     confidence : float
     """
-    cov = np.asarray(cov_m2, dtype=float)
+    centre = _validate.float_array(
+        "center_m", center_m, last=(2,), allow_empty=True, max_abs=_validate.MAX_LENGTH_M, unit="m"
+    )
+    cov = _validate.covariances("cov_m2", cov_m2, dim=2, allow_empty=True, unit="m^2")
+    if centre.shape[:-1] != cov.shape[:-2]:
+        raise ArgumentError(
+            f"center_m and cov_m2: {centre.shape[:-1]} centres but {cov.shape[:-2]} covariances"
+        )
+    _validate.number("confidence", confidence, lo=0.0, hi=1.0 - 1e-12, lo_open=True)
     lam, vec = np.linalg.eigh(0.5 * (cov + np.swapaxes(cov, -1, -2)))
     lam = np.maximum(lam, 0.0)
     major = vec[..., :, 1]
@@ -75,7 +84,7 @@ def confidence_ellipse(center_m: ArrayLike, cov_m2: ArrayLike, confidence: float
     angle = np.where(angle > np.pi / 2, angle - np.pi, np.where(angle <= -np.pi / 2, angle + np.pi, angle))
     c = ellipse_scale(confidence)
     return ConfidenceEllipse(
-        center_m=np.asarray(center_m, dtype=float),
+        center_m=centre,
         semi_major_m=c * np.sqrt(lam[..., 1]),
         semi_minor_m=c * np.sqrt(lam[..., 0]),
         angle_rad=angle,
@@ -111,8 +120,14 @@ def nees(errors_m: ArrayLike, information: ArrayLike) -> FloatArray:
     (...) float
         ``sum_m e_m^T Y_m e_m``; chi-square with ``3M`` degrees of freedom for a consistent estimator.
     """
-    e = np.asarray(errors_m, dtype=float)
-    return np.einsum("...mi,...mij,...mj->...", e, np.asarray(information, dtype=float), e)
+    e = _validate.float_array("errors_m", errors_m, min_ndim=2, max_abs=_validate.MAX_LENGTH_M, unit="m")
+    info = _validate.float_array("information", information, min_ndim=3, max_abs=_validate.MAX_INFORMATION)
+    if info.shape[-2:] != (e.shape[-1], e.shape[-1]) or info.shape[:-2] != e.shape[:-1]:
+        raise ArgumentError(
+            f"errors_m and information: shapes {e.shape} and {info.shape} do not match "
+            "((..., M, d) and (..., M, d, d))"
+        )
+    return np.einsum("...mi,...mij,...mj->...", e, info, e)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -146,9 +161,12 @@ class ChiSquareCheck:
 
 def chi_square_check(samples: ArrayLike, dof: int) -> ChiSquareCheck:
     """Compare NEES samples (one per run) with ``chi2(dof)``: mean within 3 SE, KS p-value."""
-    x = np.asarray(samples, dtype=float).ravel()
-    if x.size < 2 or dof < 1:
-        raise ConfigError(f"need at least 2 samples and dof >= 1, got {x.size} samples, dof {dof}")
+    x = _validate.float_array("samples", samples, allow_empty=True).ravel()
+    _validate.integer("dof", dof, lo=1, hi=1_000_000)
+    if x.size < 2:
+        raise ArgumentError(f"samples: {x.size} given; at least 2 are needed")
+    if np.any(x < 0.0):
+        raise ArgumentError(f"samples: {x.min():g} is negative; NEES samples lie in [0, inf)")
     half = 3.0 * np.sqrt(2.0 * dof / x.size)
     return ChiSquareCheck(
         mean=float(x.mean()),

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray
+from oceanloc.errors import ArgumentError
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -32,7 +33,9 @@ class Gaussian:
         mean = np.asarray(self.mean, dtype=float)
         cov = np.asarray(self.cov, dtype=float)
         if mean.ndim != 2 or cov.shape != (*mean.shape, mean.shape[1]):
-            raise ValueError(f"Gaussian needs mean (B, n) and cov (B, n, n); got {mean.shape}, {cov.shape}")
+            raise ArgumentError(
+                f"Gaussian needs mean (B, n) and cov (B, n, n); got {mean.shape}, {cov.shape}"
+            )
         object.__setattr__(self, "mean", mean)
         object.__setattr__(self, "cov", cov)
 

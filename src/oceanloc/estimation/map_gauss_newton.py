@@ -42,8 +42,9 @@ from typing import Protocol
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrArray
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ArgumentError, ConfigError
 from oceanloc.models.measurements import range_jacobian, range_m
 
 
@@ -142,6 +143,7 @@ class MapOptions:
             raise ConfigError(f"delta_min_m must be a positive number, got {self.delta_min_m}")
         if self.max_iterations < 1:
             raise ConfigError(f"max_iterations must be at least 1, got {self.max_iterations}")
+        _validate.integer("max_iterations", self.max_iterations, lo=1, hi=1_000_000)
 
 
 MAP_STATUS: tuple[str, ...] = ("converged", "max-iterations", "degenerate", "non-finite")
@@ -215,16 +217,29 @@ class RangeProblem:
         sigma_m: ArrayLike,
         mask: ArrayLike | None = None,
     ) -> RangeProblem:
-        """Validate shapes and broadcast ``sigma_m`` and ``mask`` to ``(B, n)``."""
-        z = np.atleast_2d(np.asarray(ranges_m, dtype=float))
-        sensors = np.asarray(sensor_m, dtype=float)
+        """Validate and broadcast ``sigma_m`` and ``mask`` to ``(B, n)``.
+
+        Ranges lie in ``[0, MAX_LENGTH_M]``, sensor coordinates within ``MAX_LENGTH_M``, sigmas within
+        ``SIGMA_RANGE_M`` (:mod:`oceanloc._validate`); an ArgumentError names the argument otherwise.
+        """
+        z = np.atleast_2d(
+            _validate.float_array("ranges_m", ranges_m, max_abs=_validate.MAX_LENGTH_M, unit="m")
+        )
+        if z.ndim != 2:
+            raise ArgumentError(f"ranges_m: shape {z.shape}, expected (B, n)")
+        if np.any(z < 0.0):
+            raise ArgumentError(f"ranges_m: {z.min():g} m is negative; ranges lie in [0, 1e+08] m")
+        sensors = _validate.float_array("sensor_m", sensor_m, max_abs=_validate.MAX_LENGTH_M, unit="m")
         if sensors.ndim == 2 and sensors.shape == (z.shape[-1], 3):
             sensors = np.broadcast_to(sensors, (*z.shape, 3))
         if sensors.shape != (*z.shape, 3):
-            raise ConfigError(f"sensor_m has shape {sensors.shape}, expected {(*z.shape, 3)}")
-        sig = np.broadcast_to(np.asarray(sigma_m, dtype=float), z.shape)
-        if not np.all(sig > 0.0):
-            raise ConfigError("range standard deviations must be positive")
+            raise ArgumentError(f"sensor_m: shape {sensors.shape}, expected {(*z.shape, 3)}")
+        try:
+            sig = np.broadcast_to(_validate.sigmas("sigma_m", sigma_m), z.shape)
+        except ValueError as exc:
+            if isinstance(exc, ArgumentError):
+                raise
+            raise ArgumentError(f"sigma_m: cannot broadcast to the ranges' shape {z.shape}") from None
         use = np.ones(z.shape, bool) if mask is None else np.broadcast_to(np.asarray(mask, bool), z.shape)
         return cls(sensor_m=sensors, ranges_m=z, sigma_m=sig, mask=use)
 
@@ -274,16 +289,26 @@ def solve_map(
         symmetric positive definite (singular included), naming the problem.
     """
     opts = options or MapOptions()
-    mean = np.atleast_2d(np.asarray(prior.mean, dtype=float))
+    mean = np.atleast_2d(_validate.float_array("prior.mean", prior.mean))
+    if mean.ndim != 2:
+        raise ArgumentError(f"prior.mean: shape {np.shape(prior.mean)}, expected (B, d)")
     batch, dim = mean.shape
     if problem.batch_size != batch:
         raise ConfigError(f"prior has {batch} problems but the measurements have {problem.batch_size}")
-    cov = np.broadcast_to(np.asarray(prior.cov, dtype=float), (batch, dim, dim))
+    cov = _validate.float_array("prior.cov", prior.cov, min_ndim=2)
+    if cov.shape[-2:] != (dim, dim) or cov.ndim > 3 or (cov.ndim == 3 and cov.shape[0] not in (1, batch)):
+        raise ArgumentError(
+            f"prior.cov: shape {cov.shape}, expected ({dim}, {dim}) or ({batch}, {dim}, {dim})"
+        )
+    cov = np.broadcast_to(cov, (batch, dim, dim))
     prior_info = _prior_information(mean, cov)
-    x = _to_water(mean.copy() if initial is None else np.array(initial, dtype=float), opts)
+    start = mean if initial is None else _validate.float_array("initial", initial, shape=(batch, dim))
+    x = _to_water(np.array(start, dtype=float), opts)
 
     all_rows = np.arange(batch)
-    cost = _cost(problem, x, all_rows, mean, prior_info)
+    with np.errstate(over="ignore", invalid="ignore"):
+        cost = _cost(problem, x, all_rows, mean, prior_info)
+    _check_measurements(problem, x, cost)
     lam = np.zeros(batch)
     iterations = np.zeros(batch, dtype=np.int64)
     converged = np.zeros(batch, dtype=bool)
@@ -375,12 +400,57 @@ def _normal_equations(
     )
 
 
+MAX_WHITENED_RESIDUAL = 1e12
+"""Largest ``|z - h(x)| / sigma`` at the start point accepted (beyond it a measurement cannot belong to the
+problem: a range of 1e300 m, a sigma of 1e-300 m), checked only when the start's cost is that large."""
+
+
+def _check_measurements(problem: WhitenedModel, x: FloatArray, cost: FloatArray) -> None:
+    """ArgumentError naming the first measurement whose whitened residual at the start is NaN, infinite
+    or beyond :data:`MAX_WHITENED_RESIDUAL` (the residuals are evaluated only if the cost says so)."""
+    suspect = np.flatnonzero(~(cost <= 0.5 * MAX_WHITENED_RESIDUAL**2))
+    if suspect.size == 0:
+        return
+    rows = suspect[:1]
+    with np.errstate(all="ignore"):
+        resid = (
+            problem.residuals(x[rows], rows)
+            if hasattr(problem, "residuals")
+            else problem.evaluate(x[rows], rows)[0]
+        )
+    bad = ~(np.abs(resid[0]) <= MAX_WHITENED_RESIDUAL)
+    b = int(rows[0])
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ArgumentError(
+            f"problem: measurement {i} of problem {b} has a whitened residual of {resid[0, i]:.3g} at the "
+            f"start (NaN, infinite or beyond {MAX_WHITENED_RESIDUAL:g} sigmas): a measurement or sigma out "
+            "of range"
+        )
+    raise ArgumentError(
+        f"problem: the start point's cost of problem {b} is {cost[b]:.3g}: the measurements or their sigmas "
+        "are out of range"
+    )
+
+
 def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:
-    """The prior information matrices ``P0^-1``; ConfigError for a prior that is not a valid Gaussian."""
+    """The prior information matrices ``P0^-1``; ConfigError for a prior that is not a valid Gaussian.
+
+    Beyond a finite mean and a symmetric positive definite covariance, the mean must lie within
+    ``MAX_LENGTH_M`` and no covariance eigenvalue exceed ``MAX_VARIANCE`` (:mod:`oceanloc._validate`):
+    a prior of 1e300 m^2 ends in a singular normal matrix, not in a weak prior.
+    """
     bad = ~np.all(np.isfinite(mean), axis=-1)
     if bad.any():
         b = int(np.argmax(bad))
         raise ConfigError(f"prior mean of problem {b} holds NaN or infinite values: {mean[b].tolist()}")
+    bad = np.any(np.abs(mean) > _validate.MAX_LENGTH_M, axis=-1)
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ArgumentError(
+            f"prior mean of problem {b}: {mean[b].tolist()} is beyond the allowed magnitude "
+            f"{_validate.MAX_LENGTH_M:g}"
+        )
     bad = ~np.all(np.isfinite(cov), axis=(-1, -2))
     if bad.any():
         b = int(np.argmax(bad))
@@ -394,6 +464,13 @@ def _prior_information(mean: FloatArray, cov: FloatArray) -> FloatArray:
         b = int(np.argmax(bad))
         raise ConfigError(f"prior covariance of problem {b} is not symmetric: {cov[b].tolist()} m^2")
     w = np.linalg.eigvalsh(cov)
+    bad = w[:, -1] > _validate.MAX_VARIANCE
+    if bad.any():
+        b = int(np.argmax(bad))
+        raise ArgumentError(
+            f"prior covariance of problem {b}: eigenvalue {w[b, -1]:.3g} is beyond the allowed "
+            f"{_validate.MAX_VARIANCE:g} (a sigma of {np.sqrt(_validate.MAX_VARIANCE):g})"
+        )
     bad = ~(w[:, 0] > 1e-15 * w[:, -1])
     if bad.any():
         b = int(np.argmax(bad))

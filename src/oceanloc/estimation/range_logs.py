@@ -34,8 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import BoolArray, FloatArray, IntArray
-from oceanloc.errors import ConfigError, DataError
+from oceanloc.errors import ArgumentError, ConfigError, DataError
 from oceanloc.estimation.map_gauss_newton import (
     GaussianPrior,
     MapOptions,
@@ -794,6 +795,19 @@ def beacon_range_counts(aligned: AlignedRanges) -> dict[int, int]:
     return {int(b): int(c) for b, c in zip(beacons, counts, strict=True)}
 
 
+def _check_aligned(aligned: AlignedRanges) -> None:
+    """The aligned log's arrays are finite and of one length, ranges in ``[0, MAX_LENGTH_M]``."""
+    big = _validate.MAX_LENGTH_M
+    z = _validate.float_array("aligned.range_m", aligned.range_m, shape=(None,), max_abs=big, unit="m")
+    m = z.shape[0]
+    _validate.float_array("aligned.vehicle_enu_m", aligned.vehicle_enu_m, shape=(m, 3), max_abs=big, unit="m")
+    _validate.float_array("aligned.t_unix_s", aligned.t_unix_s, shape=(m,), max_abs=1e11, unit="s")
+    if np.asarray(aligned.beacon).shape != (m,):
+        raise ArgumentError(f"aligned.beacon: shape {np.asarray(aligned.beacon).shape}, expected ({m},)")
+    if np.any(z < 0.0):
+        raise ArgumentError(f"aligned.range_m: {z.min():g} m is negative")
+
+
 def localize_beacons(
     aligned: AlignedRanges,
     *,
@@ -831,6 +845,11 @@ def localize_beacons(
         below their shortest range (:func:`prior_mean`).
     """
     check_gps_model(sigma_range_m, sigma_gps_m, gps_correlation_s)
+    _check_aligned(aligned)
+    _validate.sigmas("prior_sigma_enu_m", prior_sigma_enu_m)
+    _validate.number("prior_depth_m", prior_depth_m, lo=0.0, hi=11_000.0, unit="m")
+    _validate.number("outlier_threshold", outlier_threshold, lo=0.0, hi=1e6, lo_open=True)
+    _validate.number("max_outlier_fraction", max_outlier_fraction, lo=0.0, hi=1.0)
     out = []
     surface = float(np.median(aligned.vehicle_enu_m[:, 2]))
     for beacon in np.unique(aligned.beacon):

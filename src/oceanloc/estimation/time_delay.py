@@ -58,6 +58,7 @@ from typing import Any, Literal, TypeAlias
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, FloatArray
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.io.wav import common_sample_rate, read_wav
@@ -163,6 +164,8 @@ class RecordingDelay:
 
 BandSpec: TypeAlias = tuple[float, float] | Literal["auto"] | None
 
+MAX_SAMPLE = 1e12
+"""Largest sample magnitude accepted (32-bit integer samples reach 2.1e9; the spectra of 1e308 overflow)."""
 MIN_RECORDING_SAMPLES = 64
 """Shortest recording a delay is estimated from: the band detection smooths over 8 bins and takes the
 noise floor as a percentile over all bins, which needs a few dozen bins at least."""
@@ -299,8 +302,13 @@ def estimate_delay(
         raise DataError(f"recordings must be 1-D with at least 2 samples; got shapes {x.shape} and {y.shape}")
     if not np.all(np.isfinite(x)) or not np.all(np.isfinite(y)):
         raise DataError("recordings hold non-finite samples")
+    _validate.float_array("a", x, max_abs=MAX_SAMPLE)
+    _validate.float_array("b", y, max_abs=MAX_SAMPLE)
     if not sample_rate_hz > 0:
         raise ConfigError(f"sample rate must be positive, got {sample_rate_hz}")
+    _validate.number("sample_rate_hz", sample_rate_hz, lo=0.0, hi=1e9, lo_open=True, unit="Hz")
+    if max_delay_s is not None:
+        _validate.number("max_delay_s", max_delay_s, lo=0.0, hi=1e6, lo_open=True, unit="s")
     if method not in DELAY_METHODS:
         raise ConfigError(f"method must be one of {', '.join(DELAY_METHODS)}; got {method!r}")
     if isinstance(band_hz, str) and band_hz != "auto":

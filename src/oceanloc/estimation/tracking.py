@@ -28,6 +28,7 @@ from typing import Literal, TypeAlias
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError
 from oceanloc.estimation.bounds import hdop_from_jacobian
@@ -306,6 +307,12 @@ def predict_update(
     raise ConfigError(f"filter must be one of {', '.join(FILTER_KINDS)}; got {kind!r}")
 
 
+def _check_initial(initial: Gaussian) -> None:
+    """The initial density is finite, within the bounds of :mod:`oceanloc._validate`, and a covariance."""
+    _validate.float_array("initial.mean", initial.mean, max_abs=_validate.MAX_LENGTH_M)
+    _validate.covariances("initial.cov", initial.cov)
+
+
 def run_filter(
     kind: FilterKind,
     initial: Gaussian,
@@ -344,8 +351,13 @@ def run_filter(
     initial_streak : (B,) int, optional
         Epochs outside the gate carried over from a previous block of the same run (``TrackResult.streak``).
     """
-    z = np.asarray(measurements, dtype=float)
-    sens = np.asarray(sensors_m, dtype=float)
+    _check_initial(initial)
+    z = _validate.float_array(
+        "measurements", measurements, allow_nan=True, allow_empty=True, max_abs=_validate.MAX_LENGTH_M
+    )
+    sens = _validate.float_array("sensors_m", sensors_m, max_abs=_validate.MAX_LENGTH_M, unit="m")
+    if gate_probability is not None:
+        _validate.number("gate_probability", gate_probability, lo=0.0, hi=1.0, lo_open=True)
     b, t_count = initial.batch_size, z.shape[1] if z.ndim == 3 else -1
     if z.shape != (b, t_count, sensor_model.dim):
         raise ConfigError(f"measurements must be (B={b}, T, m={sensor_model.dim}); got {z.shape}")

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, FloatArray
 
 
@@ -26,7 +27,7 @@ def rmsee(errors_m: ArrayLike) -> FloatArray:
     (...) float
         ``sqrt(mean_c ||e_c||^2)``, metres (e.g. ``(N, M)`` per epoch and transponder).
     """
-    err = np.asarray(errors_m, dtype=float)
+    err = _validate.float_array("errors_m", errors_m, min_ndim=2, max_abs=_validate.MAX_LENGTH_M, unit="m")
     return np.sqrt(np.mean(np.sum(err * err, axis=-1), axis=0))
 
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import FloatArray
 from oceanloc.config.survey import SurveyScenario
 from oceanloc.estimation.consistency import (
@@ -201,6 +202,7 @@ def survey_monte_carlo(
     progress: Callable[[int], None] | None = None,
 ) -> SurveyMonteCarlo:
     """Run ``runs`` independent surveys of ``scenario`` and summarize them."""
+    _validate.integer("seed", seed, lo=0, hi=2**63 - 1)
     task = functools.partial(_chunk_metrics, scenario=scenario, seed=seed)
     parts = run_chunked(task, runs, executor=executor, chunk_size=chunk_size, progress=progress)
     joined = concat_runs(parts)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray
+from oceanloc.errors import ArgumentError
 from oceanloc.models.energy import EnergyBudget
 
 
@@ -74,8 +75,10 @@ class DriftPath:
         p = np.asarray(self.points_m, dtype=float).reshape(-1, 2)
         t = np.asarray(self.times_s, dtype=float).reshape(-1)
         f = np.asarray(self.flight, dtype=bool).reshape(-1)
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(t))):
+            raise ArgumentError("DriftPath: points_m and times_s must be finite")
         if t.shape[0] != p.shape[0] or f.shape[0] != max(p.shape[0] - 1, 0):
-            raise ValueError(
+            raise ArgumentError(
                 f"inconsistent path arrays: {p.shape[0]} points, {t.shape[0]} times, {f.shape[0]} edges"
             )
         for name, value in (("points_m", p), ("times_s", t), ("flight", f)):

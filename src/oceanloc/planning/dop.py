@@ -19,8 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._typing import ArrayLike, FloatArray
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ArgumentError, ConfigError
 from oceanloc.estimation.bounds import hdop_from_jacobian
 from oceanloc.models.measurements import (
     MEASUREMENT_KINDS,
@@ -126,8 +127,34 @@ def hdop(
     >>> float(hdop(ring, np.zeros(2), "range"))  # four ranges at right angles: sqrt(2 / 2)
     1.0
     """
-    jac = position_jacobian(nodes_m, target_m, kind, pairs=pairs, sound_speed_mps=sound_speed_mps)
+    nodes = _validate.float_array("nodes_m", nodes_m, last=(2,), min_ndim=2, max_abs=_validate.MAX_LENGTH_M)
+    target = _validate.float_array("target_m", target_m, last=(2,), max_abs=_validate.MAX_LENGTH_M)
+    _check_kind(kind)
+    sig = np.asarray(sigma, dtype=float)
+    if sig.size == 0 or not np.all(sig > 0.0):  # +inf is allowed: a node that is missing (module docstring)
+        raise ArgumentError(f"sigma: must be positive (or +inf for a missing node), got {sig!r}")
+    _validate.number("sound_speed_mps", sound_speed_mps, lo=1000.0, hi=2000.0, unit="m/s")
+    n = nodes.shape[-2]
+    rows = n * (n - 1) // 2 if kind == "tdoa" and pairs is None else n
+    batch = float(np.prod(np.broadcast_shapes(nodes.shape[:-2], target.shape[:-1]), dtype=float))
+    _validate.memory("nodes_m", batch * rows * 2 * 8 * _WORK_COPIES, what=f"HDOP of {batch:.0f} flocks")
+    jac = position_jacobian(nodes, target, kind, pairs=pairs, sound_speed_mps=sound_speed_mps)
+    try:
+        np.broadcast_shapes(sig.shape, jac.shape[:-1])
+    except ValueError:
+        raise ArgumentError(
+            f"sigma: shape {sig.shape} does not fit the {jac.shape[-2]} measurements"
+        ) from None
     return hdop_from_jacobian(jac, sigma)
+
+
+_WORK_COPIES = 8
+"""Arrays of the Jacobian's size an HDOP evaluation holds at once (differences, Jacobian, products)."""
+
+
+def _check_kind(kind: object) -> None:
+    if kind not in ("bearing", "range", "tdoa"):
+        raise ArgumentError(f"kind: {kind!r}; allowed: bearing, range, tdoa")
 
 
 def hdop_unit(kind: str, sigma: float) -> str:
@@ -258,12 +285,20 @@ def hdop_map(
     fixed = np.atleast_2d(np.asarray(fixed_nodes_m, dtype=float))
     if fixed.shape[-1] != 2:
         raise ConfigError(f"fixed nodes must be (n, 2), got {fixed.shape}")
+    _validate.float_array("fixed_nodes_m", fixed, max_abs=_validate.MAX_LENGTH_M, allow_empty=True)
     if not resolution_m > 0:
         raise ConfigError(f"grid resolution must be positive, got {resolution_m}")
+    _validate.number("resolution_m", resolution_m, lo=0.0, hi=_validate.MAX_LENGTH_M, lo_open=True)
     _check_sigma(sigma)
-    for name, (lo, hi) in (("x", x_range_m), ("y", y_range_m)):
+    for name, span in (("x", x_range_m), ("y", y_range_m)):
+        lo, hi = _validate.float_array(f"{name}_range_m", span, shape=(2,), max_abs=_validate.MAX_LENGTH_M)
         if not hi > lo:
             raise ConfigError(f"grid {name} range must have max > min, got {lo}..{hi}")
+        if (hi - lo) / resolution_m > 1e5:
+            raise ArgumentError(
+                f"{name}_range_m: {(hi - lo) / resolution_m:.3g} cells across at {resolution_m:g} m; "
+                "at most 1e5: coarsen the resolution"
+            )
     x = np.arange(x_range_m[0], x_range_m[1] + 0.5 * resolution_m, resolution_m)
     y = np.arange(y_range_m[0], y_range_m[1] + 0.5 * resolution_m, resolution_m)
     if x.size * y.size > 25_000_000:
@@ -276,6 +311,10 @@ def hdop_map(
     return DopMap(
         x_m=x, y_m=y, hdop=values, fixed_nodes_m=fixed, target_m=target, kind=kind, sigma=float(sigma)
     )
+
+
+MAX_PLACED_NODES = 10_000
+"""Most nodes :func:`optimize_placement` places at once."""
 
 
 def _check_sigma(sigma: float) -> None:
@@ -396,10 +435,21 @@ def optimize_placement(
     progress : callable, optional
         Called with 1 after each local optimization.
     """
+    _validate.integer("n_nodes", n_nodes, lo=1, hi=MAX_PLACED_NODES)
+    _validate.integer("starts", starts, lo=1, hi=10_000)
+    _validate.integer("screen", screen, lo=1, hi=1_000_000)
+    _check_kind(kind)
     fixed = (
         np.zeros((0, 2)) if fixed_nodes_m is None else np.atleast_2d(np.asarray(fixed_nodes_m, dtype=float))
     )
+    _validate.float_array("fixed_nodes_m", fixed, max_abs=_validate.MAX_LENGTH_M, allow_empty=True)
+    _validate.float_array("target_m", target_m, shape=(2,), max_abs=_validate.MAX_LENGTH_M)
+    _validate.number("min_standoff_m", min_standoff_m, lo=0.0, hi=_validate.MAX_LENGTH_M, lo_open=True)
+    _validate.number("max_standoff_m", max_standoff_m, lo=0.0, hi=_validate.MAX_LENGTH_M, lo_open=True)
     total = n_nodes + fixed.shape[0]
+    rows = total * (total - 1) // 2 if kind == "tdoa" else total
+    at_once = max(screen, 64 * 16, 4 * n_nodes)
+    _validate.memory("n_nodes", at_once * rows * 2 * 8 * _WORK_COPIES, what=f"placing {n_nodes} nodes")
     if n_nodes < 1 or total < (3 if kind == "tdoa" else 2):
         raise ConfigError(f"{kind} placement needs at least {3 if kind == 'tdoa' else 2} nodes, got {total}")
     if not 0 < min_standoff_m <= max_standoff_m:

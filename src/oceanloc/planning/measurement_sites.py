@@ -26,9 +26,10 @@ from typing import Protocol
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._random import BatchRng, uniform
 from oceanloc._typing import FloatArray, IntArray
-from oceanloc.errors import ConfigError
+from oceanloc.errors import ArgumentError, ConfigError
 from oceanloc.models.vehicles import unicycle_rollout
 from oceanloc.planning.box_search import BoxSearchOptions, maximize_in_box
 from oceanloc.planning.information import information_gain, log_det_identity_plus_gram, scaled_cholesky
@@ -55,6 +56,20 @@ class PlanningState:
     yaw_rad: FloatArray
     estimates_m: FloatArray
     covariances_m2: FloatArray
+
+    def __post_init__(self) -> None:
+        big = _validate.MAX_LENGTH_M
+        pos = _validate.float_array("pos_enu_m", self.pos_enu_m, shape=(None, 3), max_abs=big, unit="m")
+        b = pos.shape[0]
+        _validate.float_array("yaw_rad", self.yaw_rad, shape=(b,), max_abs=1e6, unit="rad")
+        est = _validate.float_array(
+            "estimates_m", self.estimates_m, shape=(b, None, 3), max_abs=big, unit="m"
+        )
+        cov = _validate.float_array("covariances_m2", self.covariances_m2, shape=(b, est.shape[1], 3, 3))
+        if np.any(np.abs(cov) > _validate.MAX_VARIANCE):
+            raise ArgumentError(
+                f"covariances_m2: beyond the allowed magnitude {_validate.MAX_VARIANCE:g} m^2"
+            )
 
     @property
     def batch(self) -> int:
@@ -388,6 +403,12 @@ class RandomYawPlanner:
     period_s: float
     sigma_range_m: float
 
+    def __post_init__(self) -> None:
+        _validate.number("max_yaw_rate_rad_s", self.max_yaw_rate_rad_s, lo=0.0, hi=10.0, lo_open=True)
+        _validate.number("speed_mps", self.speed_mps, lo=0.0, hi=100.0, lo_open=True)
+        _validate.number("period_s", self.period_s, lo=0.0, hi=86_400.0, lo_open=True)
+        _validate.sigmas("sigma_range_m", self.sigma_range_m)
+
     def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """Draw one yaw rate per problem from ``rng`` (one generator, or one per problem)."""
         if rng is None:
@@ -413,6 +434,12 @@ class RandomDiskPlanner:
 
     max_distance_m: float
     sigma_range_m: float
+
+    def __post_init__(self) -> None:
+        _validate.number(
+            "max_distance_m", self.max_distance_m, lo=0.0, hi=_validate.MAX_LENGTH_M, lo_open=True
+        )
+        _validate.sigmas("sigma_range_m", self.sigma_range_m)
 
     def plan(self, state: PlanningState, rng: BatchRng | None = None) -> SitePlanResult:
         """Draw one point per problem from ``rng`` (one generator, or one per problem)."""

@@ -24,9 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from oceanloc import _validate
 from oceanloc._random import run_generators, standard_normal
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from oceanloc.config.survey import SurveyScenario
+from oceanloc.errors import ArgumentError
 from oceanloc.estimation.consistency import nees
 from oceanloc.estimation.map_gauss_newton import GaussianPrior, MapOptions, RangeProblem, solve_map
 from oceanloc.models.measurements import range_m
@@ -116,7 +118,12 @@ def simulate_surveys(scenario: SurveyScenario, run_indices: ArrayLike, seed: int
     seed : int
         Master seed.
     """
-    runs = np.asarray(run_indices, dtype=np.int64).ravel()
+    runs = _validate.float_array("run_indices", run_indices, max_abs=2.0**62).ravel()
+    if np.any(runs < 0) or np.any(runs != np.round(runs)):
+        raise ArgumentError("run_indices: must be non-negative integers")
+    runs = runs.astype(np.int64)
+    _validate.integer("seed", seed, lo=0, hi=2**63 - 1)
+    scenario.check_runs(runs.size)
     rngs = run_generators(seed, runs)
     n_runs, n_epochs, m = runs.size, scenario.epochs, scenario.n_transponders
     truth = scenario.transponders_enu_m
