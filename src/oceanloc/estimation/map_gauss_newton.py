@@ -289,14 +289,14 @@ def solve_map(
         symmetric positive definite (singular included), naming the problem.
     """
     opts = options or MapOptions()
-    mean = np.atleast_2d(_validate.float_array("prior.mean", prior.mean))
+    mean = np.atleast_2d(np.asarray(prior.mean, dtype=float))  # values: _prior_information
     if mean.ndim != 2:
         raise ArgumentError(f"prior.mean: shape {np.shape(prior.mean)}, expected (B, d)")
     batch, dim = mean.shape
     if problem.batch_size != batch:
         raise ConfigError(f"prior has {batch} problems but the measurements have {problem.batch_size}")
-    cov = _validate.float_array("prior.cov", prior.cov, min_ndim=2)
-    if cov.shape[-2:] != (dim, dim) or cov.ndim > 3 or (cov.ndim == 3 and cov.shape[0] not in (1, batch)):
+    cov = np.asarray(prior.cov, dtype=float)
+    if cov.ndim < 2 or cov.shape[-2:] != (dim, dim) or cov.ndim > 3 or (cov.ndim == 3 and cov.shape[0] not in (1, batch)):
         raise ArgumentError(
             f"prior.cov: shape {cov.shape}, expected ({dim}, {dim}) or ({batch}, {dim}, {dim})"
         )
