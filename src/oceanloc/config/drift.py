@@ -17,7 +17,8 @@ and the path-following trial::
     # tidal: mean_mps = [u, v], amplitude_mps = [u, v], period_h, phase_deg (uniform, oscillating);
     # linear: matrix_per_s = [[a, b], [c, d]], offset_mps = [u, v] (v = A p + b: shear, strain);
     # rankine: centre_m, core_radius_m, peak_speed_mps, pulse, period_h, background_mps;
-    # netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
+    # netcdf: path (relative to this file; a NetCDF file or a Zarr store), u, v, depth_m or depth_index,
+    # time_window = ["2024-03-01T00:00:00", "2024-03-02T00:00:00"], origin_lonlat_deg
 
     [drift]
     integrator = "euler"           # euler (the thesis) | rk4
@@ -41,6 +42,7 @@ and the path-following trial::
     start_time_s = 0.0             # start time in the field's clock (s; a double gyre's phase, or
                                    # seconds after a netcdf product's first slice); netcdf may give
     # start_time = "2024-01-01T06:00:00" instead (ISO 8601, within the product's time axis)
+    # start_lonlat_deg = [-117.3, 32.6] and goal_lonlat_deg instead of start_m/goal_m (lon/lat products)
 
     [vehicle]                      # Table 1 and (IV.14)
     flight_power_w = 200.0
@@ -77,31 +79,32 @@ and the path-following trial::
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from oceanloc.config.builtin import builtin_folder, builtin_names, resolve_scenario
+from oceanloc.config.drift_currents import (
+    MAX_COORD_M,
+    MAX_CURRENT_MPS,
+    MAX_DT_S,
+    MAX_HORIZON_H,
+    MAX_HORIZON_STEPS,
+    MAX_LENGTH_M,
+    MAX_SEED,
+    MIN_DT_S,
+    CurrentSettings,
+    _coords,
+    _currents,
+)
 from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.models.currents import (
-    CurrentField,
-    DoubleGyreCurrent,
-    LinearCurrent,
-    RankineVortexCurrent,
-    TidalCurrent,
-    UniformCurrent,
-    VortexCurrent,
-    thesis_vortex_grid,
-    time_span_s,
-)
-from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
+from oceanloc.models.currents import CurrentField, time_span_s
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
-from oceanloc.models.obstacles import ObstacleMap, OccupancyGrid
+from oceanloc.models.obstacles import ObstacleMap
 from oceanloc.models.powered import PROPULSIONS, Propulsion
 from oceanloc.planning.drift_rrt.lattice import check_lattice_memory
 from oceanloc.planning.drift_rrt.objective import HdopTerm
@@ -113,23 +116,6 @@ from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.planning.drift_rrt.time_plan import DEFAULT_TIME_OPTIONS
 from oceanloc.planning.drift_rrt.time_values import TimeLattice
 from oceanloc.units import DEG
-
-CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "tidal", "linear", "rankine", "netcdf")
-
-# Physical ranges of the scenario fields (every value outside is a one-line error naming the field).
-MAX_CURRENT_MPS = 10.0
-"""Fastest current accepted, m/s (the strongest tidal races run at about 5 m/s)."""
-MAX_COORD_M = 1e7
-"""Largest coordinate of a local frame, metres (a quarter of the Earth's circumference)."""
-MAX_LENGTH_M = 1e6
-"""Largest length scale of an analytic field, metres."""
-MIN_DT_S, MAX_DT_S = 1.0, 3600.0
-"""Drift step range, seconds."""
-MAX_HORIZON_H = 24.0 * 30
-"""Longest drift horizon, hours (a month)."""
-MAX_HORIZON_STEPS = 200_000
-"""Most drift steps in one horizon (horizon / step)."""
-MAX_SEED = 2**63 - 1
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -212,6 +198,10 @@ class DriftScenario:
     following : FollowingSettings
     projection : LocalProjection or None
         Local frame of a longitude/latitude current product (plans are written in lon/lat too).
+    ensemble : tuple of CurrentField
+        The members of an ensemble forecast (``current`` is their mean); empty for one forecast.
+    time_origin : str or None
+        The product's first time slice (ISO 8601), time 0 of ``start_time_s``.
     currents_description : str
     data_files : tuple of str
         Data files the scenario reads (a current product), for provenance.
@@ -245,6 +235,8 @@ class DriftScenario:
     projection: LocalProjection | None = None
     currents_description: str = ""
     data_files: tuple[str, ...] = ()
+    ensemble: tuple[CurrentField, ...] = ()
+    time_origin: str | None = None
     toml_text: str = field(default="", repr=False)
 
 
@@ -290,170 +282,6 @@ def check_planning_memory(scenario: DriftScenario, source: str) -> None:
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class CurrentSettings:
-    """``[currents]``: the planning current, its georeference, a one-line description, land cells."""
-
-    field: CurrentField
-    projection: LocalProjection | None
-    description: str
-    land: OccupancyGrid | None = None
-    data_files: tuple[str, ...] = ()
-    time_origin: str | None = None
-
-
-def _currents(t: Table, base_dir: Path) -> CurrentSettings:
-    kind = t.str("kind", "thesis-vortex", choices=CURRENT_KINDS)
-    if kind == "thesis-vortex":
-        interp = t.str("interpolation", "cell", choices=("cell", "linear"))
-        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
-        f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
-        how = "piecewise constant per cell" if interp == "cell" else "bilinear"
-        return CurrentSettings(
-            field=f, projection=None, description=f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
-        )
-    if kind == "vortex":
-        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
-        half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
-        return CurrentSettings(
-            field=VortexCurrent(scale_m=scale, half_width_m=half),
-            projection=None,
-            description=f"analytic thesis vortex (scale {scale:g} m)",
-        )
-    if kind == "double-gyre":
-        length = t.float("length_m", 5000.0, lo=1.0, hi=MAX_LENGTH_M)
-        amp = t.float("amplitude_mps", 0.5, lo=0.0, hi=MAX_CURRENT_MPS)
-        eps = t.float("epsilon", 0.0, lo=0.0, hi=1.0)
-        period_h = t.float("period_h", 24.0, lo=0.01, hi=24.0 * 365)
-        origin = _coords(t, "origin_m", 2, [0.0, 0.0])
-        f = DoubleGyreCurrent(
-            length_m=length,
-            amplitude_mps=amp,
-            epsilon=eps,
-            omega_rad_s=2 * math.pi / (period_h * 3600.0),
-            origin_m=(float(origin[0]), float(origin[1])),
-        )
-        desc = f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}"
-        return CurrentSettings(field=f, projection=None, description=desc)
-    if kind == "uniform":
-        vel = t.vector("velocity_mps", 2)
-        if not np.all(np.abs(vel) <= MAX_CURRENT_MPS):
-            raise t.error(
-                "velocity_mps",
-                f"components must lie within [-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}] m/s, "
-                f"got {vel.tolist()}",
-            )
-        return CurrentSettings(
-            field=UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
-            projection=None,
-            description=f"uniform {vel.tolist()} m/s",
-        )
-    if kind == "tidal":
-        mean = _velocity(t, "mean_mps", [0.0, 0.0])
-        amp = _velocity(t, "amplitude_mps")
-        period_h = t.float("period_h", 12.42, lo=0.01, hi=24.0 * 365)
-        phase = t.float("phase_deg", 0.0, lo=-360.0, hi=360.0)
-        f = TidalCurrent(
-            mean_mps=(float(mean[0]), float(mean[1])),
-            amplitude_mps=(float(amp[0]), float(amp[1])),
-            period_s=period_h * 3600.0,
-            phase_rad=phase * DEG,
-        )
-        desc = f"tidal stream {mean.tolist()} + {amp.tolist()} sin(2 pi t / {period_h:g} h) m/s"
-        return CurrentSettings(field=f, projection=None, description=desc)
-    if kind == "linear":
-        raw = t._get("matrix_per_s", None)
-        try:
-            mat = np.asarray(raw, dtype=float).reshape(2, 2)
-        except (TypeError, ValueError):
-            raise t.error("matrix_per_s", f"must be [[a, b], [c, d]] in 1/s, got {raw!r}") from None
-        if not (np.all(np.isfinite(mat)) and np.all(np.abs(mat) <= 1.0)):
-            raise t.error(
-                "matrix_per_s", f"entries must be finite and within [-1, 1] 1/s, got {mat.tolist()}"
-            )
-        off = _velocity(t, "offset_mps", [0.0, 0.0])
-        f = LinearCurrent(
-            matrix_per_s=((mat[0, 0], mat[0, 1]), (mat[1, 0], mat[1, 1])),
-            offset_mps=(float(off[0]), float(off[1])),
-        )
-        return CurrentSettings(
-            field=f, projection=None, description=f"linear v = {mat.tolist()} p + {off.tolist()}"
-        )
-    if kind == "rankine":
-        centre = _coords(t, "centre_m", 2, [0.0, 0.0])
-        radius = t.float("core_radius_m", 2000.0, lo=1.0, hi=MAX_LENGTH_M)
-        peak = t.float("peak_speed_mps", 0.5, lo=-MAX_CURRENT_MPS, hi=MAX_CURRENT_MPS)
-        pulse = t.float("pulse", 0.0, lo=0.0, hi=1.0)
-        period_h = t.float("period_h", 6.0, lo=0.01, hi=24.0 * 365)
-        bg = _velocity(t, "background_mps", [0.0, 0.0])
-        f = RankineVortexCurrent(
-            centre_m=(float(centre[0]), float(centre[1])),
-            core_radius_m=radius,
-            peak_speed_mps=peak,
-            pulse=pulse,
-            period_s=period_h * 3600.0,
-            background_mps=(float(bg[0]), float(bg[1])),
-        )
-        desc = (
-            f"Rankine vortex R = {radius:g} m, {peak:g} m/s pulsing {pulse:g} over {period_h:g} h, "
-            f"carried at {bg.tolist()} m/s"
-        )
-        return CurrentSettings(field=f, projection=None, description=desc)
-    return _netcdf_currents(t, base_dir)
-
-
-def _velocity(t: Table, key: str, default: object = None) -> np.ndarray:
-    """A ``[u, v]`` velocity in m/s within plus or minus :data:`MAX_CURRENT_MPS`."""
-    vel = t.vector(key, 2) if default is None else t.vector(key, 2, default)
-    if not np.all(np.abs(vel) <= MAX_CURRENT_MPS):
-        raise t.error(
-            key,
-            f"components must lie within [-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}] m/s, got {vel.tolist()}",
-        )
-    return vel
-
-
-def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
-    rel = t.str("path")
-    path = Path(rel) if Path(rel).is_absolute() else base_dir / rel
-    u = t.str("u", "") or None
-    v = t.str("v", "") or None
-    depth = t.int("depth_index", -1, lo=-1)
-    origin = t.vector("origin_lonlat_deg", 2, []) if t.has("origin_lonlat_deg") else None
-    if origin is not None and not (-180.0 <= origin[0] <= 360.0 and -90.0 <= origin[1] <= 90.0):
-        raise t.error(
-            "origin_lonlat_deg",
-            f"must be [lon, lat] within [-180, 360] and [-90, 90] degrees, got {origin.tolist()}",
-        )
-    interp = t.str("interpolation", "linear", choices=("cell", "linear"))
-    product = open_current_netcdf(
-        path,
-        u_var=u,
-        v_var=v,
-        depth_index=None if depth < 0 else depth,
-        origin_lonlat_deg=None if origin is None else (float(origin[0]), float(origin[1])),
-        interpolation=interp,  # type: ignore[arg-type]
-    )
-    f = product.field
-    with np.errstate(invalid="ignore"):
-        peak = float(np.nanmax(np.hypot(f.u_mps, f.v_mps))) if np.isfinite(f.u_mps).any() else 0.0
-    if not peak <= MAX_CURRENT_MPS:
-        raise t.error(
-            "path",
-            f"{path.name} holds currents up to {peak:.3g} m/s; speeds must lie within "
-            f"[0, {MAX_CURRENT_MPS:g}] m/s "
-            "(check the variables' units and fill values)",
-        )
-    return CurrentSettings(
-        field=product.field,
-        projection=product.projection,
-        description=product.description,
-        land=land_obstacles(product.field),
-        data_files=(str(path),),
-        time_origin=product.time_origin,
-    )
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
 class DriftSettings:
     """``[drift]``: integrator, step (s) and the longest drift considered (s)."""
 
@@ -484,16 +312,6 @@ class MapSettings:
 
     obstacles: ObstacleMap
     flights_avoid_obstacles: bool
-
-
-def _coords(t: Table, key: str, length: int, default: object = None) -> np.ndarray:
-    """A vector of ``length`` finite coordinates (m) within plus or minus :data:`MAX_COORD_M`."""
-    value = t.vector(key, length) if default is None else t.vector(key, length, default)
-    if not np.all(np.abs(value) <= MAX_COORD_M):
-        raise t.error(
-            key, f"coordinates must lie within [-{MAX_COORD_M:g}, {MAX_COORD_M:g}] m, got {value.tolist()}"
-        )
-    return value
 
 
 def _map_bounds(t: Table, default_bounds: tuple[float, float, float, float] | None) -> np.ndarray:
@@ -613,8 +431,8 @@ def _start_time(t: Table, currents: CurrentSettings, horizon_s: float) -> float:
 
 
 def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettings:
-    start = _coords(t, "start_m", 2)
-    goal = _coords(t, "goal_m", 2)
+    start = _position(t, "start", currents.projection)
+    goal = _position(t, "goal", currents.projection)
     tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
     gap = float(np.linalg.norm(goal - start))
     if gap < tol:
@@ -627,6 +445,22 @@ def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettin
     t0 = _start_time(t, currents, horizon_s)
     t.check_unknown()
     return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol, start_time_s=t0)
+
+
+def _position(t: Table, what: str, projection: LocalProjection | None) -> np.ndarray:
+    """``{what}_m`` (metres in the local frame) or ``{what}_lonlat_deg`` (a product's longitude/latitude)."""
+    key_m, key_ll = f"{what}_m", f"{what}_lonlat_deg"
+    if t.has(key_ll):
+        if t.has(key_m):
+            raise t.error(key_ll, f"give {key_m} or {key_ll}, not both")
+        if projection is None:
+            raise t.error(key_ll, "needs a longitude/latitude current product; use " + key_m)
+        lonlat = t.vector(key_ll, 2)
+        if not (-360.0 <= lonlat[0] <= 360.0 and -90.0 < lonlat[1] < 90.0):
+            raise t.error(key_ll, f"must be [lon, lat] in degrees, got {lonlat.tolist()}")
+        x, y = projection.to_local(lonlat[0], lonlat[1])
+        return np.array([float(x), float(y)])
+    return _coords(t, key_m, 2)
 
 
 def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None:
@@ -797,6 +631,8 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         projection=currents.projection,
         currents_description=currents.description,
         data_files=currents.data_files,
+        ensemble=currents.members,
+        time_origin=currents.time_origin,
     )
     if scenario.planner == "oceanloc":
         check_planning_memory(scenario, root.source)

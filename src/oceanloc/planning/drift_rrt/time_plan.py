@@ -51,10 +51,9 @@ __all__ = ["DEFAULT_TIME_OPTIONS", "fly_legs", "plan_in_time"]
 DEFAULT_TIME_OPTIONS = TimeLatticeOptions()
 """The settings measured in the benchmark."""
 
-HOP_PENALTY = 0.0
-"""A landing on the lattice must promise this fraction of the spacing less than the alternatives: the value
-between nodes is uncertain by about that much, and a greedy read-out would otherwise make many small hops
-chasing it (the refinement can drop a hop, not add one)."""
+MIN_HOP = 0.5
+"""The read-out's shortest hop to a lattice node, as a fraction of the spacing: a shorter one only chases
+the error of the value between nodes (the refinement still shortens hops)."""
 
 CANDIDATE_BATCH = 64
 """Best candidates checked at once for a feasible flight (no-fly obstacles, chains of legs)."""
@@ -242,9 +241,9 @@ def read_out(tl: TimeLattice, start_m: FloatArray, t_s: float) -> list[Leg] | No
         ts = t + ss * dt
         drift_cost = price * dt * ss
         dist = np.hypot(zs[:, None, 0] - lands[None, :, 0], zs[:, None, 1] - lands[None, :, 1])
-        dist[dist < 1e-6] = np.inf
+        dist[dist < MIN_HOP * tl.h] = np.inf  # hops shorter than this chase the value's noise
         arrive = ts[:, None] + dist / tl.speed
-        total = drift_cost[:, None] + dist + tl.node_value(free[None, :], arrive) + HOP_PENALTY * tl.h
+        total = drift_cost[:, None] + dist + tl.node_value(free[None, :], arrive)
         goal_d = np.hypot(zs[:, 0] - tl.goal[0], zs[:, 1] - tl.goal[1])
         goal_total = drift_cost + goal_d
         if tl.deadline is not None:
@@ -263,7 +262,8 @@ def read_out(tl: TimeLattice, start_m: FloatArray, t_s: float) -> list[Leg] | No
             return legs
         t = float(ts[s]) + float(np.linalg.norm(landing - takeoff)) / tl.speed
         pos = landing.copy()
-    return None
+    # Out of flights: go straight to the goal from where the vehicle is.
+    return legs + flight_legs(tl, 0, pos.copy(), tl.goal.copy(), True)
 
 
 # -- refinement in the air -------------------------------------------------------------------------------
