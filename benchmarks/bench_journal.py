@@ -7,7 +7,7 @@
   0.5 s each, the library calls the commands make and the whole commands. ``survey add`` stores the
   estimates of the records in the journal, which the commands read while the records are unchanged;
   beside it, the status of the journal grown by one fix, whose estimates are recomputed;
-* the live loop's estimator (:class:`~oceanloc.field.survey_state.SurveyState`) holding 50,000 records
+* the live loop's estimator (:class:`~oceanloc.field.survey.state.SurveyState`) holding 50,000 records
   (a 5.5-hour log): the time from appending one range to having the estimates and the next waypoint,
   median (target at most 10 ms) and 95th percentile; and with the range's SQLite commit, the loop's
   budget (target: median at most 20 ms).
@@ -25,15 +25,15 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.field.survey_journal import (
+from oceanloc.field.survey.estimates import (
     add_to_journal,
     journal_next_waypoint,
     journal_status,
     survey_estimates,
 )
-from oceanloc.field.survey_state import SurveyState
-from oceanloc.io.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
+from oceanloc.field.survey.state import SurveyState
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs

@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.field.live_sources import position_opener, range_opener
 from oceanloc.field.live_survey import LiveOptions, StopRule, run_live_survey
+from oceanloc.field.survey.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.geo.enu import enu_to_geodetic
-from oceanloc.io.journal import Journal, append_gps_log, append_range_log
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
 from oceanloc.io.nmea import format_gga, format_hdt, format_zda, read_nmea
 from oceanloc.io.usbl import read_usbl

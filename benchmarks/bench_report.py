@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.io.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.report.html.browser import PLOTLY_READY, find_chromium, load_page

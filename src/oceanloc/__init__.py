@@ -78,9 +78,9 @@ _LAZY: dict[str, tuple[str, str]] = {
     "localize_gnssa": ("oceanloc.estimation.gnssa", "localize_gnssa"),
     "GnssaOptions": ("oceanloc.estimation.gnssa", "GnssaOptions"),
     "localize_beacons": ("oceanloc.estimation.range_logs", "localize_beacons"),
-    "Journal": ("oceanloc.io.journal", "Journal"),
-    "survey_estimates": ("oceanloc.field.survey_journal", "survey_estimates"),
-    "next_waypoint": ("oceanloc.field.survey_journal", "next_waypoint"),
+    "Journal": ("oceanloc.field.survey.journal", "Journal"),
+    "survey_estimates": ("oceanloc.field.survey.estimates", "survey_estimates"),
+    "next_waypoint": ("oceanloc.field.survey.estimates", "next_waypoint"),
 }
 
 __all__ = [
@@ -164,9 +164,9 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the real objects
     from oceanloc.estimation.time_delay import estimate_delay
     from oceanloc.evaluation.metrics import rmsee
     from oceanloc.evaluation.survey import survey_monte_carlo
-    from oceanloc.field.survey_journal import next_waypoint, survey_estimates
+    from oceanloc.field.survey.estimates import next_waypoint, survey_estimates
+    from oceanloc.field.survey.journal import Journal
     from oceanloc.io.gnssa import read_gnssa
-    from oceanloc.io.journal import Journal
     from oceanloc.models.paths import DriftPath
     from oceanloc.planning.dop import hdop, hdop_map, optimize_placement
     from oceanloc.planning.drift_rrt.planner import make_planner as make_drift_planner

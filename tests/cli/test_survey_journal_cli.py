@@ -12,9 +12,9 @@ import pytest
 from typer.testing import CliRunner
 
 from oceanloc.cli.app import app, main
-from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.field.survey_journal import next_waypoint, survey_estimates
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.estimates import next_waypoint, survey_estimates
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from oceanloc.field.survey_journal_check import check_journal
-from oceanloc.io import journal as journal_module
-from oceanloc.io.journal import Journal, JournalError
+from oceanloc.field.survey import journal as journal_module
+from oceanloc.field.survey.check import check_journal
+from oceanloc.field.survey.journal import Journal, JournalError
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
 
 START = ["--planner", "greedy", "--max-distance", "4", "--beacon", "1", "--beacon", "2"]

@@ -91,7 +91,7 @@ def test_bad_inputs():
     with pytest.raises(ConfigError, match="method"):
         estimate_delay(np.ones(10), np.ones(10), FS, method="music")
     with pytest.raises(ConfigError, match="max delay"):
-        estimate_delay(np.ones(10), np.ones(10), FS, max_delay_s=1e-9)
+        estimate_delay(np.ones(100), np.ones(100), FS, max_delay_s=1e-9)
 
 
 def _wideband_case(seed):

@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError
 from oceanloc.field.live_sources import position_opener, range_opener
 from oceanloc.field.live_survey import LiveOptions, StopRule, check_stop, run_live_survey
-from oceanloc.field.survey_journal import survey_estimates
+from oceanloc.field.survey.estimates import survey_estimates
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.io.journal import Journal
 from oceanloc.io.nmea import format_gga, format_zda
 from oceanloc.report.tables.live import epoch_line, result_lines
 

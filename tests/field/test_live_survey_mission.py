@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.field.geofence import WatchdogConfig
 from oceanloc.field.live_sources import position_opener, range_opener
 from oceanloc.field.live_survey import LiveOptions, StopRule, run_live_survey
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
 from oceanloc.sim.boat import MODE_AUTO, MODE_GUIDED
 from tests.field._live_rig import LAT0, LON0, live_rig

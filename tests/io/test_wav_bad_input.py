@@ -95,3 +95,37 @@ def test_tdoa_command_on_a_truncated_file_exits_2_with_one_line(tmp_path: Path, 
     )
     assert res.returncode == 2 and "Traceback" not in res.stderr
     assert "too short for a delay search of +-0.1 s" in " ".join(res.stderr.split())
+
+
+def test_a_two_sample_recording_is_refused_through_the_command(tmp_path: Path):
+    """A two-sample WAV once gave a delay with a Cramer-Rao sd of 6e-7 s and exit 0."""
+    tiny = tmp_path / "tiny.wav"
+    scipy.io.wavfile.write(tiny, RATE, np.array([1000, -1000], dtype=np.int16))
+    res = subprocess.run(
+        [sys.executable, "-m", "oceanloc", "tdoa", str(tiny), str(tiny)],
+        capture_output=True,
+        text=True,
+        env=os.environ,
+    )
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "recordings of 2 and 2 samples are too short for a delay estimate" in " ".join(res.stderr.split())
+    lines = res.stderr.splitlines()
+    assert [line for line in lines if "error" in line.lower()] == lines[-1:]
+
+
+@pytest.mark.parametrize(("n", "ok"), [(63, False), (64, True)])
+def test_the_shortest_recording_has_64_samples(n: int, ok: bool):
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal(n)
+    if ok:
+        assert np.isfinite(estimate_delay(a, np.roll(a, 3), RATE, method="xcorr").delay_samples)
+        return
+    with pytest.raises(DataError, match=rf"recordings of {n} and {n} samples are too short.*at least 64"):
+        estimate_delay(a, np.roll(a, 3), RATE, method="xcorr")
+
+
+def test_the_unbounded_search_stays_where_the_recordings_overlap_by_half():
+    a, b = _sweep(1000, 40), _sweep(1000)
+    est = estimate_delay(a, b, RATE, method="xcorr")
+    assert est.delay_samples == pytest.approx(40.0, abs=0.05)
+    assert np.max(np.abs(est.lags_s)) * RATE <= 500

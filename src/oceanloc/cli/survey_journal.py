@@ -1,9 +1,9 @@
 """``oceanloc survey``: a field survey journal (start, add, check, next, status, export).
 
-Every fix, heading and range goes into an SQLite journal (:mod:`oceanloc.io.journal`: files in
+Every fix, heading and range goes into an SQLite journal (:mod:`oceanloc.field.survey.journal`: files in
 transactions of 2,000 records in file order, so a killed add leaves a prefix of them committed); the
 estimates and the next waypoint are computed from the journal alone
-(:mod:`oceanloc.field.survey_journal`), so a killed process loses nothing committed and a re-run gives the
+(:mod:`oceanloc.field.survey.estimates`), so a killed process loses nothing committed and a re-run gives the
 same numbers.
 """
 
@@ -17,11 +17,11 @@ import typer
 from oceanloc.cli import root
 from oceanloc.cli._common import cli_provenance, console, err_console, escape, write_json
 from oceanloc.cli._options import parse_fields, parse_number, parse_origin, parse_time
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError
-from oceanloc.field.survey_journal import add_to_journal, journal_next_waypoint, journal_status
-from oceanloc.field.survey_journal_check import check_journal, journal_invalid_records
-from oceanloc.io.journal import Journal, fix_problem, range_problem
+from oceanloc.field.survey.check import check_journal, journal_invalid_records
+from oceanloc.field.survey.estimates import add_to_journal, journal_next_waypoint, journal_status
+from oceanloc.field.survey.journal import Journal, fix_problem, range_problem
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.planning.site_planners import parse_site_planner
 from oceanloc.report.tables import survey_journal as tables
 from oceanloc.units import DEG
@@ -229,7 +229,7 @@ def export(
     ] = None,
 ) -> None:
     """Export the beacon estimates with their 95% ellipses and the track (GeoJSON), and every table (CSV)."""
-    from oceanloc.field.survey_journal_export import export_journal
+    from oceanloc.field.survey.export import export_journal
 
     res = export_journal(journal, geojson=geojson, csv=csv)
     if res.geojson is not None:

@@ -20,12 +20,12 @@ import typer
 from oceanloc.cli._common import console, err_console, escape
 from oceanloc.cli._options import parse_floats, parse_origin
 from oceanloc.cli.survey_journal import JournalArg, app
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.field.geofence import WatchdogConfig, read_geofence
 from oceanloc.field.live_sources import position_opener, range_opener
 from oceanloc.field.live_survey import Epoch, LiveOptions, Notice, StopRule, run_live_survey
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.mavlink_vehicle import MavlinkVehicle
 from oceanloc.io.records import to_jsonable
 from oceanloc.report.tables import live as live_tables

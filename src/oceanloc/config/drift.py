@@ -9,10 +9,14 @@ and the path-following trial::
     description = "..."
 
     [currents]
-    kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | netcdf
+    kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | tidal | linear |
+                                   # rankine | netcdf
     interpolation = "cell"         # thesis-vortex: cell (the thesis' lookup) | linear
     # vortex: scale_m; double-gyre: length_m, amplitude_mps, epsilon, period_h, origin_m;
     # uniform: velocity_mps = [u, v];
+    # tidal: mean_mps = [u, v], amplitude_mps = [u, v], period_h, phase_deg (uniform, oscillating);
+    # linear: matrix_per_s = [[a, b], [c, d]], offset_mps = [u, v] (v = A p + b: shear, strain);
+    # rankine: centre_m, core_radius_m, peak_speed_mps, pulse, period_h, background_mps;
     # netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
 
     [drift]
@@ -44,6 +48,8 @@ and the path-following trial::
     max_flight_time_s = 120.0
     nautical_mile_m = 1852.0       # 2000 only to reproduce the thesis' energies
     flight_legs = "hop"            # hop: legs of at most one hop; any: any length (thesis accounting)
+    propulsion = "air"             # air: flights unaffected by the current (the AquaQuad); water: a boat
+                                   # moving at flight_speed_kn through the water, carried by the current
 
     [hdop]                         # flock geometry of the HDOP cost term (bearing-only, as the thesis)
     others_m = [[5000.0, 5000.0], [5000.0, -5000.0], [-5000.0, -5000.0]]
@@ -53,6 +59,8 @@ and the path-following trial::
     kind = "oceanloc"              # oceanloc | thesis-single | thesis-optimality-seeking
     seed = 1
     time_weight_wh_per_h = 0.0     # price of time in the oceanloc planner (0: flight energy only)
+    objective = "energy"           # energy: flight energy plus the price of time; time: arrive first
+    deadline_h = 12.0              # optional: reach the goal within this many hours of the start
 
     [following]                    # path following in a "true" current (V.D)
     watch_circle_m = 150.0
@@ -82,6 +90,9 @@ from oceanloc.geo.projection import LocalProjection
 from oceanloc.models.currents import (
     CurrentField,
     DoubleGyreCurrent,
+    LinearCurrent,
+    RankineVortexCurrent,
+    TidalCurrent,
     UniformCurrent,
     VortexCurrent,
     thesis_vortex_grid,
@@ -91,16 +102,19 @@ from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
 from oceanloc.models.obstacles import ObstacleMap, OccupancyGrid
+from oceanloc.models.powered import PROPULSIONS, Propulsion
 from oceanloc.planning.drift_rrt.lattice import check_lattice_memory
 from oceanloc.planning.drift_rrt.objective import HdopTerm
-from oceanloc.planning.drift_rrt.oceanloc_planner import DEFAULT_OPTIONS
+from oceanloc.planning.drift_rrt.oceanloc_planner import DEFAULT_OPTIONS, needs_time
 from oceanloc.planning.drift_rrt.planner import DriftPlannerName, parse_planner_name
-from oceanloc.planning.drift_rrt.problem import DriftProblem
+from oceanloc.planning.drift_rrt.problem import OBJECTIVES, DriftProblem, Objective
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
+from oceanloc.planning.drift_rrt.time_plan import DEFAULT_TIME_OPTIONS
+from oceanloc.planning.drift_rrt.time_values import TimeLattice
 from oceanloc.units import DEG
 
-CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
+CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "tidal", "linear", "rankine", "netcdf")
 
 # Physical ranges of the scenario fields (every value outside is a one-line error naming the field).
 MAX_CURRENT_MPS = 10.0
@@ -180,6 +194,12 @@ class DriftScenario:
     energy : EnergyBudget
     max_leg_m : float or None
         Longest flight leg (one hop) or ``None`` for flights of any length.
+    propulsion : {"air", "water"}
+        What powered legs move through (:mod:`oceanloc.models.powered`).
+    objective : {"energy", "time"}
+        What the oceanloc planner minimizes.
+    max_duration_s : float or None
+        Deadline after the start, seconds (energy with a deadline), or ``None``.
     hdop_others_m : (n, 2) float or None
         Other flock members for the HDOP term.
     hdop_target_m : (2,) float or None
@@ -213,6 +233,9 @@ class DriftScenario:
     start_time_s: float = 0.0
     energy: EnergyBudget = field(default_factory=EnergyBudget)
     max_leg_m: float | None = None
+    propulsion: Propulsion = "air"
+    objective: Objective = "energy"
+    max_duration_s: float | None = None
     hdop_others_m: np.ndarray | None = None
     hdop_target_m: np.ndarray | None = None
     planner: DriftPlannerName = "oceanloc"
@@ -257,7 +280,11 @@ def check_planning_memory(scenario: DriftScenario, source: str) -> None:
     which of them to change.
     """
     try:
-        check_lattice_memory(problem_from_scenario(scenario), DEFAULT_OPTIONS)
+        problem = problem_from_scenario(scenario)
+        if needs_time(problem):
+            TimeLattice(problem, DEFAULT_TIME_OPTIONS, np.zeros(2)).check_memory()
+        else:
+            check_lattice_memory(problem, DEFAULT_OPTIONS)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
 
@@ -320,7 +347,69 @@ def _currents(t: Table, base_dir: Path) -> CurrentSettings:
             projection=None,
             description=f"uniform {vel.tolist()} m/s",
         )
+    if kind == "tidal":
+        mean = _velocity(t, "mean_mps", [0.0, 0.0])
+        amp = _velocity(t, "amplitude_mps")
+        period_h = t.float("period_h", 12.42, lo=0.01, hi=24.0 * 365)
+        phase = t.float("phase_deg", 0.0, lo=-360.0, hi=360.0)
+        f = TidalCurrent(
+            mean_mps=(float(mean[0]), float(mean[1])),
+            amplitude_mps=(float(amp[0]), float(amp[1])),
+            period_s=period_h * 3600.0,
+            phase_rad=phase * DEG,
+        )
+        desc = f"tidal stream {mean.tolist()} + {amp.tolist()} sin(2 pi t / {period_h:g} h) m/s"
+        return CurrentSettings(field=f, projection=None, description=desc)
+    if kind == "linear":
+        raw = t._get("matrix_per_s", None)
+        try:
+            mat = np.asarray(raw, dtype=float).reshape(2, 2)
+        except (TypeError, ValueError):
+            raise t.error("matrix_per_s", f"must be [[a, b], [c, d]] in 1/s, got {raw!r}") from None
+        if not (np.all(np.isfinite(mat)) and np.all(np.abs(mat) <= 1.0)):
+            raise t.error(
+                "matrix_per_s", f"entries must be finite and within [-1, 1] 1/s, got {mat.tolist()}"
+            )
+        off = _velocity(t, "offset_mps", [0.0, 0.0])
+        f = LinearCurrent(
+            matrix_per_s=((mat[0, 0], mat[0, 1]), (mat[1, 0], mat[1, 1])),
+            offset_mps=(float(off[0]), float(off[1])),
+        )
+        return CurrentSettings(
+            field=f, projection=None, description=f"linear v = {mat.tolist()} p + {off.tolist()}"
+        )
+    if kind == "rankine":
+        centre = _coords(t, "centre_m", 2, [0.0, 0.0])
+        radius = t.float("core_radius_m", 2000.0, lo=1.0, hi=MAX_LENGTH_M)
+        peak = t.float("peak_speed_mps", 0.5, lo=-MAX_CURRENT_MPS, hi=MAX_CURRENT_MPS)
+        pulse = t.float("pulse", 0.0, lo=0.0, hi=1.0)
+        period_h = t.float("period_h", 6.0, lo=0.01, hi=24.0 * 365)
+        bg = _velocity(t, "background_mps", [0.0, 0.0])
+        f = RankineVortexCurrent(
+            centre_m=(float(centre[0]), float(centre[1])),
+            core_radius_m=radius,
+            peak_speed_mps=peak,
+            pulse=pulse,
+            period_s=period_h * 3600.0,
+            background_mps=(float(bg[0]), float(bg[1])),
+        )
+        desc = (
+            f"Rankine vortex R = {radius:g} m, {peak:g} m/s pulsing {pulse:g} over {period_h:g} h, "
+            f"carried at {bg.tolist()} m/s"
+        )
+        return CurrentSettings(field=f, projection=None, description=desc)
     return _netcdf_currents(t, base_dir)
+
+
+def _velocity(t: Table, key: str, default: object = None) -> np.ndarray:
+    """A ``[u, v]`` velocity in m/s within plus or minus :data:`MAX_CURRENT_MPS`."""
+    vel = t.vector(key, 2) if default is None else t.vector(key, 2, default)
+    if not np.all(np.abs(vel) <= MAX_CURRENT_MPS):
+        raise t.error(
+            key,
+            f"components must lie within [-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}] m/s, got {vel.tolist()}",
+        )
+    return vel
 
 
 def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
@@ -549,10 +638,12 @@ def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class VehicleSettings:
-    """``[vehicle]``: the energy budget (Table 1, IV.14) and the longest flight leg (m, ``None``: any)."""
+    """``[vehicle]``: the energy budget (Table 1, IV.14), the longest flight leg (m, ``None``: any) and what
+    powered legs move through."""
 
     energy: EnergyBudget
     max_leg_m: float | None
+    propulsion: Propulsion = "air"
 
 
 def _vehicle(t: Table) -> VehicleSettings:
@@ -567,8 +658,13 @@ def _vehicle(t: Table) -> VehicleSettings:
         nautical_mile_m=t.float("nautical_mile_m", 1852.0, lo=1000.0, hi=3000.0),
     )
     legs = t.str("flight_legs", "hop", choices=("hop", "any"))
+    propulsion = t.str("propulsion", "air", choices=PROPULSIONS)
     t.check_unknown()
-    return VehicleSettings(energy=energy, max_leg_m=energy.max_hop_m if legs == "hop" else None)
+    return VehicleSettings(
+        energy=energy,
+        max_leg_m=energy.max_hop_m if legs == "hop" and propulsion == "air" else None,
+        propulsion=propulsion,  # type: ignore[arg-type]
+    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -599,20 +695,39 @@ def _hdop(t: Table) -> HdopSettings:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class PlannerSettings:
-    """``[planner]``: default planner, its seed, and the price of time (Wh per hour)."""
+    """``[planner]``: default planner, its seed, the price of time (Wh per hour), the objective and the
+    deadline (s after the start, or ``None``)."""
 
     planner: DriftPlannerName
     seed: int
     time_weight_wh_per_h: float
+    objective: Objective = "energy"
+    max_duration_s: float | None = None
 
 
-def _planner_settings(t: Table) -> PlannerSettings:
+def _planner_settings(t: Table, horizon_s: float) -> PlannerSettings:
     raw = t.str("kind", "oceanloc")
     planner = parse_planner_name(raw, t.where("kind") + ":")
     seed = t.int("seed", 1, lo=0, hi=MAX_SEED)
     time_weight = t.float("time_weight_wh_per_h", 0.0, lo=0.0, hi=1e4)
+    objective = t.str("objective", "energy", choices=OBJECTIVES)
+    deadline = None
+    if t.has("deadline_h"):
+        deadline = t.float("deadline_h", 12.0, lo=0.0, lo_open=True, hi=MAX_HORIZON_H) * 3600.0
+        if deadline > horizon_s + 1e-6:
+            raise t.error(
+                "deadline_h",
+                f"{deadline / 3600:g} h is beyond the planning horizon "
+                f"([drift] horizon_h = {horizon_s / 3600:g} h)",
+            )
     t.check_unknown()
-    return PlannerSettings(planner=planner, seed=seed, time_weight_wh_per_h=time_weight)
+    return PlannerSettings(
+        planner=planner,
+        seed=seed,
+        time_weight_wh_per_h=time_weight,
+        objective=objective,  # type: ignore[arg-type]
+        max_duration_s=deadline,
+    )
 
 
 def _following(t: Table) -> FollowingSettings:
@@ -651,7 +766,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     route = _route(route_t, currents, drift.horizon_s)
     vehicle = _vehicle(root.table("vehicle", required=False))
     hdop = _hdop(root.table("hdop", required=False))
-    planner = _planner_settings(root.table("planner", required=False))
+    planner = _planner_settings(root.table("planner", required=False), drift.horizon_s)
     following = _following(root.table("following", required=False))
     root.check_unknown()
     _check_route(route_t, route, map_.obstacles)
@@ -670,6 +785,9 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         start_time_s=route.start_time_s,
         energy=vehicle.energy,
         max_leg_m=vehicle.max_leg_m,
+        propulsion=vehicle.propulsion,
+        objective=planner.objective,
+        max_duration_s=planner.max_duration_s,
         hdop_others_m=hdop.others_m,
         hdop_target_m=hdop.target_m,
         planner=planner.planner,
@@ -704,4 +822,7 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
         max_leg_m=scenario.max_leg_m,
         time_weight_wh_per_h=scenario.time_weight_wh_per_h,
         t0_s=scenario.start_time_s,
+        objective=scenario.objective,
+        max_duration_s=scenario.max_duration_s,
+        propulsion=scenario.propulsion,
     )

@@ -163,6 +163,9 @@ class RecordingDelay:
 
 BandSpec: TypeAlias = tuple[float, float] | Literal["auto"] | None
 
+MIN_RECORDING_SAMPLES = 64
+"""Shortest recording a delay is estimated from: the band detection smooths over 8 bins and takes the
+noise floor as a percentile over all bins, which needs a few dozen bins at least."""
 _FLOOR_PERCENTILE = 10.0
 """Noise floor of the smoothed spectrum: this percentile over all bins (a signal may fill up to ~85 %)."""
 _BAND_SIGMAS = 5.0
@@ -271,7 +274,10 @@ def estimate_delay(
     method : {"xcorr", "gcc-phat"}
     max_delay_s : float, optional
         Search only ``|delay| <= max_delay_s`` (e.g. the node separation over the sound speed). Each
-        recording must last at least twice that (a DataError otherwise).
+        recording must last at least twice that (a DataError otherwise). Without it, the search covers
+        the delays at which the recordings overlap by at least half the shorter one. Either way each
+        recording must hold at least ``MIN_RECORDING_SAMPLES`` samples: below that neither the band nor
+        the noise floor (hence the Cramer-Rao sd) can be estimated.
     band_hz : (low, high), "auto" or None
         Use only this frequency band (e.g. the sweep's band), removing out-of-band noise; ``"auto"``
         (default) detects the signal's band from the recordings (module docstring), ``None`` uses all.
@@ -303,6 +309,12 @@ def estimate_delay(
         raise ConfigError(f"band must be 0 <= low < high, got {band_hz}")
     if not np.any(x) or not np.any(y):
         raise DataError("a recording is silent (all samples zero): no delay can be estimated")
+    if min(x.size, y.size) < MIN_RECORDING_SAMPLES:
+        raise DataError(
+            f"recordings of {x.size} and {y.size} samples are too short for a delay estimate: each must "
+            f"hold at least {MIN_RECORDING_SAMPLES} samples ({MIN_RECORDING_SAMPLES / sample_rate_hz:.6g} s "
+            f"at {sample_rate_hz:g} Hz), and twice the delay searched"
+        )
     if max_delay_s is not None:
         if not max_delay_s > 0:
             raise ConfigError(f"max delay must be positive, got {max_delay_s}")
@@ -324,7 +336,9 @@ def estimate_delay(
     lags = np.concatenate([np.arange(-(y.size - 1), 0), np.arange(0, x.size)])
     values = np.concatenate([corr[n_fft - (y.size - 1) :], corr[: x.size]])
     envelope = np.concatenate([analytic[n_fft - (y.size - 1) :], analytic[: x.size]])
-    window = np.ones(lags.size, dtype=bool)
+    # Unbounded search: the lags at which the recordings still overlap by half the shorter one, so that
+    # the rule for a bounded search (each recording at least twice the window) holds here too.
+    window = np.abs(lags) <= min(x.size, y.size) // 2
     if max_delay_s is not None:
         window = np.abs(lags) <= max_delay_s * sample_rate_hz
         if window.sum() < 3:

@@ -1,11 +1,11 @@
 """The live survey: measure, journal, estimate, plan and command, until the survey meets its goal.
 
 ``oceanloc survey run`` drives an autonomous surface vehicle that ranges to seafloor transponders.
-Everything it reads goes into the survey journal (:mod:`oceanloc.io.journal`) as it arrives, one
+Everything it reads goes into the survey journal (:mod:`oceanloc.field.survey.journal`) as it arrives, one
 transaction per record, before anything is computed from it. Then, for every new range (an *epoch*; the
 ranges that came while the previous epoch ran are folded into this one):
 
-1. the survey's planner (greedy D-optimal or look-ahead, :func:`~oceanloc.field.survey_journal.
+1. the survey's planner (greedy D-optimal or look-ahead, :func:`~oceanloc.field.survey.estimates.
    next_waypoint`) picks the next site from the vehicle's last fix, on the estimates of every range
    aligned so far (receding horizon: the site is re-planned at every range, so the vehicle always heads
    for the most informative point within reach; with drop positions, from the first fix on);
@@ -13,7 +13,7 @@ ranges that came while the previous epoch ran are folded into this one):
    check_site`: clipped inside, or refused) and sent to the vehicle as a GUIDED position target (or, with
    ``command="mission"``, as a mission of the planned sites flown in AUTO);
 3. the beacons are re-estimated (:class:`EpochEstimator`: the journal's records held in memory by
-   :class:`~oceanloc.field.survey_state.SurveyState`, only the beacons that got aligned ranges re-fitted
+   :class:`~oceanloc.field.survey.state.SurveyState`, only the beacons that got aligned ranges re-fitted
    from their previous estimates; the same robust MAP and linearization check as ``survey status``). A
    range is placed on the track only once the fix after it has come, so the range that started the
    epoch is seldom in any estimate yet; the plan of step 1 is the previous epoch's re-fit, short of the
@@ -53,7 +53,6 @@ from typing import Literal
 import numpy as np
 
 from oceanloc import __version__
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.field.geofence import (
     CheckedSite,
@@ -67,9 +66,10 @@ from oceanloc.field.geofence import (
     watchdog_start,
 )
 from oceanloc.field.live_sources import Arrival, SourcePump
-from oceanloc.field.survey_journal import SurveyEstimates, Waypoint, next_waypoint
-from oceanloc.field.survey_state import SurveyState
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.estimates import SurveyEstimates, Waypoint, next_waypoint
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
+from oceanloc.field.survey.state import SurveyState
 from oceanloc.io.mavlink_vehicle import CommandResult, LinkStatus, MavlinkVehicle
 from oceanloc.io.nmea import GpsFix, Heading
 from oceanloc.io.usbl import RangeRecord
@@ -236,7 +236,7 @@ def check_stop(
 
 class EpochEstimator:
     """The current estimates and plan, kept up to date in memory as records are journaled
-    (:class:`~oceanloc.field.survey_state.SurveyState`: started from the journal, so a resumed run
+    (:class:`~oceanloc.field.survey.state.SurveyState`: started from the journal, so a resumed run
     continues from every committed record; work per epoch bounded by what the estimate needs)."""
 
     def __init__(self, journal: Journal, settings: JournalSettings) -> None:

@@ -140,6 +140,12 @@ class DriftPath:
         return float(np.sum(self.edge_lengths_m()[self.flight])) if self.n_points > 1 else 0.0
 
     @property
+    def flight_time_s(self) -> float:
+        """Time spent on flight (powered) edges, seconds."""
+        dt = np.diff(self.times_s)
+        return float(np.sum(dt[self.flight])) if self.n_points > 1 else 0.0
+
+    @property
     def drift_time_s(self) -> float:
         dt = np.diff(self.times_s)
         return float(np.sum(dt[~self.flight]))

@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 
 from oceanloc.cli.app import app
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.io.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.journal import Journal, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs

@@ -24,8 +24,8 @@ import numpy as np
 import pytest
 
 from oceanloc.errors import ConfigError, DataError
+from oceanloc.field.survey.journal import Journal
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
-from oceanloc.io.journal import Journal
 from oceanloc.report.html.browser import find_chromium, load_page
 from oceanloc.report.html.live import JournalTail, serve_journal
 from tests.report.html.conftest import make_journal

@@ -73,9 +73,9 @@ def test_log_tables_fit_100_columns_with_units_and_the_origin(tmp_path):
 
 
 def test_journal_estimates_table_shows_the_trust_column(tmp_path):
-    from oceanloc.config.survey_journal import JournalSettings
-    from oceanloc.field.survey_journal import survey_estimates
-    from oceanloc.io.journal import Journal, append_gps_log, append_range_log
+    from oceanloc.field.survey.estimates import survey_estimates
+    from oceanloc.field.survey.journal import Journal, append_gps_log, append_range_log
+    from oceanloc.field.survey.settings import JournalSettings
     from oceanloc.io.nmea import read_nmea
     from oceanloc.io.usbl import read_usbl
     from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
@@ -98,7 +98,7 @@ def test_journal_estimates_table_shows_the_trust_column(tmp_path):
 
 
 def test_waypoint_line_names_beacons_whose_ellipse_is_not_trusted():
-    from oceanloc.field.survey_journal import Waypoint
+    from oceanloc.field.survey.estimates import Waypoint
     from oceanloc.planning.status import PlanStatus
 
     w = Waypoint(

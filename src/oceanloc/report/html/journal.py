@@ -1,7 +1,7 @@
 """The report of a survey journal: track, ranges as taken, beacon estimates, residuals, checks.
 
 Everything comes from the journal's library API: :meth:`Journal.records` (one consistent snapshot),
-:func:`survey_estimates` and :func:`next_waypoint` of :mod:`oceanloc.field.survey_journal`. The residual of
+:func:`survey_estimates` and :func:`next_waypoint` of :mod:`oceanloc.field.survey.estimates`. The residual of
 each range is ``r - |p_V - p_B|`` with ``p_V`` the vehicle's interpolated position (:func:`align_ranges`,
 as the estimator uses it) and ``p_B`` its beacon's estimate; the used ones are tested against the
 chi-square interval with ``used - 3`` degrees of freedom at the survey's range sigma.
@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
-from oceanloc.field.survey_journal import RANGE_STATUS, SurveyEstimates, next_waypoint, survey_estimates
-from oceanloc.io.journal import Journal, JournalRecords
+from oceanloc.field.survey.estimates import RANGE_STATUS, SurveyEstimates, next_waypoint, survey_estimates
+from oceanloc.field.survey.journal import Journal, JournalRecords
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.records import file_sha256
 from oceanloc.io.usbl import AlignedRanges, align_ranges
 from oceanloc.report.html.model import Check, Estimate, MapLayers, Report, Series, Table

@@ -9,14 +9,14 @@ and draws what is new with ``Plotly.extendTraces`` (track, ranges, ellipse sizes
 Reading never gets in the writer's way: each read opens its own SQLite connection with ``mode=ro``
 (no write, no schema statement, no lock beyond a WAL reader's), reads only the rows past the previous
 read (by ``rowid``) in one short read transaction, and closes it. Rows are checked with the journal's own
-checks (:func:`~oceanloc.io.journal.fix_problem`, ...) and invalid ones skipped. The estimates
-(:func:`~oceanloc.field.survey_journal.survey_estimates`) and the next site are recomputed in the
+checks (:func:`~oceanloc.field.survey.journal.fix_problem`, ...) and invalid ones skipped. The estimates
+(:func:`~oceanloc.field.survey.estimates.survey_estimates`) and the next site are recomputed in the
 background at most every :data:`ESTIMATE_PERIOD_S` seconds, when ranges arrived (every
 :data:`FIX_REFRESH_S` when only fixes did), and only while a page is watching; a request only copies
 what the client lacks. Where the journal has an ``events`` table
 (``seq, t, kind, body``; kinds ``estimate``, ``plan``, ``command``, ``link``, JSON bodies), the latest
 ``plan`` is the next site shown and the latest ``link`` state is printed; without it the next site is
-the survey planner's (:func:`~oceanloc.field.survey_journal.next_waypoint`).
+the survey planner's (:func:`~oceanloc.field.survey.estimates.next_waypoint`).
 
 The server answers GET and HEAD only (anything else: 405); no endpoint changes anything, and the page
 exposes no control of the vehicle. It binds loopback unless ``allow_remote`` is given, and answers only
@@ -43,11 +43,9 @@ from typing import Any
 
 import numpy as np
 
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.field.survey_journal import next_waypoint, survey_estimates
-from oceanloc.geo.enu import EnuOrigin, geodetic_to_enu
-from oceanloc.io.journal import (
+from oceanloc.field.survey.estimates import next_waypoint, survey_estimates
+from oceanloc.field.survey.journal import (
     FORMAT_KEY,
     JOURNAL_FORMAT,
     JournalRecords,
@@ -55,6 +53,8 @@ from oceanloc.io.journal import (
     heading_problem,
     range_problem,
 )
+from oceanloc.field.survey.settings import JournalSettings
+from oceanloc.geo.enu import EnuOrigin, geodetic_to_enu
 from oceanloc.report.html.journal import beacon_markers, range_geometry
 from oceanloc.report.html.model import Estimate, MapLayers, Series
 from oceanloc.report.html.page import (

@@ -13,8 +13,8 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
-from oceanloc.config.survey_journal import JournalSettings
-from oceanloc.field.survey_journal import MIN_RANGES, RANGE_STATUS, JournalStatus, SurveyEstimates, Waypoint
+from oceanloc.field.survey.estimates import MIN_RANGES, RANGE_STATUS, JournalStatus, SurveyEstimates, Waypoint
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.geo.enu import EnuOrigin
 from oceanloc.io.usbl import format_utc
 from oceanloc.planning.site_planners import parse_site_planner, site_planner_label

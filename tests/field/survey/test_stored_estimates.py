@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
-from oceanloc.field import survey_journal as sj
-from oceanloc.field.survey_journal import (
+from oceanloc.field.survey import estimates as sj
+from oceanloc.field.survey import journal as journal_module
+from oceanloc.field.survey.estimates import (
     ESTIMATES_NAME,
     add_to_journal,
     journal_next_waypoint,
@@ -22,8 +22,8 @@ from oceanloc.field.survey_journal import (
     survey_estimates,
     unpack_estimates,
 )
-from oceanloc.io import journal as journal_module
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.journal import Journal
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs
 
 SETTINGS = JournalSettings(planner=PlannerSettings(kind="lookahead", horizon=1), beacons=(1, 2))

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
-from oceanloc.field.survey_journal import RANGE_STATUS, next_waypoint, survey_estimates
-from oceanloc.field.survey_state import SurveyState
+from oceanloc.field.survey.estimates import RANGE_STATUS, next_waypoint, survey_estimates
+from oceanloc.field.survey.journal import Journal, JournalRecords, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
+from oceanloc.field.survey.state import SurveyState
 from oceanloc.geo.enu import enu_to_geodetic
-from oceanloc.io.journal import Journal, JournalRecords, append_gps_log, append_range_log
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import read_usbl
 from oceanloc.sim.logs import PierLogSettings, simulate_pier_logs

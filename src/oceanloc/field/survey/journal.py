@@ -680,7 +680,7 @@ class Journal:
         invalid ones are listed only when a table holds more rows than that.
 
         With ``headings=False`` only the headings recorded since the second-to-last fix are read (all
-        that :func:`~oceanloc.field.survey_journal.vehicle_yaw` looks at);
+        that :func:`~oceanloc.field.survey.estimates.vehicle_yaw` looks at);
         :attr:`JournalRecords.n_headings` is still the journal's count. ``warn=False``: no warning (the
         caller has reported the invalid rows, e.g. through :meth:`summary`).
         """
@@ -760,7 +760,7 @@ class Journal:
     def tail(self, fixes: int = 2) -> JournalRecords:
         """The last ``fixes`` valid fixes and the valid headings recorded since the first of them, no
         ranges: what the planner's start and heading need
-        (:func:`~oceanloc.field.survey_journal.vehicle_yaw`), read without reading the whole journal;
+        (:func:`~oceanloc.field.survey.estimates.vehicle_yaw`), read without reading the whole journal;
         ``heading_count`` is the journal's count."""
         cond = f"IFNULL({_VALID_SQL['fixes']}, 0)"
         try:

@@ -8,13 +8,13 @@ import pytest
 from scipy import stats
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
 from oceanloc.estimation.range_logs import localize_beacons
-from oceanloc.field.survey_journal import RANGE_STATUS, next_waypoint, survey_estimates, vehicle_yaw
-from oceanloc.field.survey_journal_export import export_csv, export_geojson
+from oceanloc.field.survey.estimates import RANGE_STATUS, next_waypoint, survey_estimates, vehicle_yaw
+from oceanloc.field.survey.export import export_csv, export_geojson
+from oceanloc.field.survey.journal import Journal, JournalRecords, append_gps_log, append_range_log
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.geojson import ring_signed_area
-from oceanloc.io.journal import Journal, JournalRecords, append_gps_log, append_range_log
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.usbl import align_ranges, read_usbl
 from oceanloc.planning.measurement_sites import GreedyPlanner, LookaheadPlanner, PlanningState

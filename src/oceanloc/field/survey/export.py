@@ -14,17 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
-from oceanloc.field.survey_journal import (
+from oceanloc.field.survey.estimates import (
     ELLIPSE_CONFIDENCE,
     RANGE_STATUS,
     SurveyEstimates,
     stored_survey_estimates,
 )
+from oceanloc.field.survey.journal import Journal, JournalRecords
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.io.csv_tables import write_csv
 from oceanloc.io.geojson import line_feature, point_feature, polygon_feature, write_geojson
-from oceanloc.io.journal import Journal, JournalRecords
 from oceanloc.io.usbl import format_utc
 
 CSV_FILES: tuple[str, ...] = ("fixes.csv", "headings.csv", "ranges.csv", "estimates.csv")

@@ -17,7 +17,7 @@ in one go or by a process that was killed and re-run.
 
 ``survey status`` and ``survey next`` read the estimates stored in the journal when the journal's
 records are those they were computed from (:func:`stored_survey_estimates`: the journal's
-:meth:`~oceanloc.io.journal.Journal.fingerprint`, the settings and the version key them), and compute and
+:meth:`~.journal.Journal.fingerprint`, the settings and the version key them), and compute and
 store them otherwise; ``survey add`` stores them after adding. Stored or computed, they are the same
 numbers to the bit (tested).
 """
@@ -35,7 +35,6 @@ import numpy as np
 
 from oceanloc import __version__
 from oceanloc._typing import BoolArray, FloatArray, IntArray
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
 from oceanloc.estimation.consistency import (
     ConfidenceEllipse,
@@ -44,8 +43,7 @@ from oceanloc.estimation.consistency import (
     range_linearization_check,
 )
 from oceanloc.estimation.range_logs import localize_beacons, prior_mean
-from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
-from oceanloc.io.journal import (
+from oceanloc.field.survey.journal import (
     AppendCounts,
     Journal,
     JournalRecords,
@@ -53,6 +51,8 @@ from oceanloc.io.journal import (
     append_gps_log,
     append_range_log,
 )
+from oceanloc.field.survey.settings import JournalSettings
+from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
 from oceanloc.io.nmea import read_nmea
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import AlignedRanges, align_ranges, format_utc, read_usbl
@@ -629,7 +629,7 @@ def add_to_journal(
     manual_ranges: Sequence[tuple[float, int, float]] = (),
 ) -> JournalAddition:
     """Append GPS logs, range logs, fixes ``(t, lat, lon, h)`` and ranges ``(t, beacon, r)`` to a started
-    journal: files in transactions of :data:`~oceanloc.io.journal.APPEND_CHUNK` records in file order (a
+    journal: files in transactions of :data:`~.journal.APPEND_CHUNK` records in file order (a
     killed process leaves a prefix of the files committed), ``fixes``/``manual_ranges`` one transaction
     per record. Everything is read and checked before the first write, so an error leaves the journal as
     it was; records already stored change nothing. Then the estimates of the journal's records are
@@ -724,7 +724,7 @@ class JournalStatus:
 
 
 ESTIMATES_NAME = "survey-estimates"
-"""Name under which the journal keeps its estimates (:meth:`~oceanloc.io.journal.Journal.derived`)."""
+"""Name under which the journal keeps its estimates (:meth:`~.journal.Journal.derived`)."""
 
 _ESTIMATES_REVISION = 1
 """Bumped when :func:`survey_estimates` changes its numbers, so estimates stored before are recomputed."""
@@ -732,7 +732,7 @@ _ESTIMATES_REVISION = 1
 
 def _estimates_key(journal: Journal, fingerprint: str | None = None) -> str:
     """What stored estimates must have been computed from: this version of the estimator, the journal's
-    settings and its records (:meth:`~oceanloc.io.journal.Journal.fingerprint`, read here unless
+    settings and its records (:meth:`~.journal.Journal.fingerprint`, read here unless
     given)."""
     meta = json.dumps(journal.meta(), sort_keys=True)
     fingerprint = journal.fingerprint() if fingerprint is None else fingerprint
@@ -786,9 +786,9 @@ def stored_survey_estimates(
 ) -> SurveyEstimates:
     """:func:`survey_estimates` of the journal's records: the stored ones if the records are those they
     were computed from, else computed (from ``records`` when given: the journal's, read by the caller;
-    else read here without warning of invalid rows, which :meth:`~oceanloc.io.journal.Journal.summary`
+    else read here without warning of invalid rows, which :meth:`~.journal.Journal.summary`
     reports) and stored for the next reader, where the journal can be written without waiting.
-    ``fingerprint``: the journal's, if just read (:attr:`~oceanloc.io.journal.RecordSummary.fingerprint`).
+    ``fingerprint``: the journal's, if just read (:attr:`~.journal.RecordSummary.fingerprint`).
 
     Raises
     ------

@@ -1,6 +1,6 @@
 """Check a survey journal: every page readable, every stored record valid; optionally remove the invalid ones.
 
-This version never writes an out-of-range record (:mod:`oceanloc.io.journal` checks each on the way in),
+This version never writes an out-of-range record (:mod:`.journal` checks each on the way in),
 but a journal written by an older version or edited by hand may hold one; the commands reading the
 journal skip it and say so, and :func:`check_journal` lists it (table, time, problem) and, asked to,
 deletes every such record in one transaction, leaving every valid record as it was.
@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from oceanloc.io.journal import InvalidRecord, Journal
+from oceanloc.field.survey.journal import InvalidRecord, Journal
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

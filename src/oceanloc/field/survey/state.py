@@ -1,6 +1,6 @@
 """A survey's estimates kept up to date as records arrive: the live loop's estimator.
 
-:func:`~oceanloc.field.survey_journal.survey_estimates` recomputes everything from the journal: fine for
+:func:`~oceanloc.field.survey.estimates.survey_estimates` recomputes everything from the journal: fine for
 ``survey status``, but a live loop re-estimating after every range would do work growing with the
 journal. :class:`SurveyState` holds the journal's records in memory and, per appended record, does only
 what the estimate needs:
@@ -19,7 +19,7 @@ what the estimate needs:
   previous epoch's result instead of a solve from afar; and the linearization check of its ellipse.
 
 Readings (each a difference from the batch estimate far below a millimetre; tested on simulated logs
-against :func:`~oceanloc.field.survey_journal.survey_estimates` of the records held, every 400 s of an
+against :func:`~oceanloc.field.survey.estimates.survey_estimates` of the records held, every 400 s of an
 hour: positions within 1 mm, measured about 1e-6 m, the same outliers range for range): a beacon that
 got no new range keeps its estimate although the prior's surface height (the median antenna height
 over all ranges) moved by a millimetre; the outlier mask is carried over instead of re-running the rule
@@ -37,7 +37,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import DataError
 from oceanloc.estimation.consistency import (
     LinearizationCheck,
@@ -50,7 +49,7 @@ from oceanloc.estimation.range_logs import (
     correlated_fit,
     robust_white_fit,
 )
-from oceanloc.field.survey_journal import (
+from oceanloc.field.survey.estimates import (
     ELLIPSE_CONFIDENCE,
     MIN_RANGES,
     RANGE_STATUS,
@@ -59,13 +58,14 @@ from oceanloc.field.survey_journal import (
     drop_means_enu_m,
     next_waypoint,
 )
+from oceanloc.field.survey.journal import Journal, JournalRecords
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.geo.enu import EnuOrigin, enu_to_geodetic, geodetic_to_enu
-from oceanloc.io.journal import Journal, JournalRecords
 
 OUTLIER_THRESHOLD = 3.0
 MAX_OUTLIER_FRACTION = 0.25
 """The outlier rule of :func:`~oceanloc.estimation.range_logs.localize_beacons`'s defaults, which
-:func:`~oceanloc.field.survey_journal.survey_estimates` uses; the GPS error model is the survey's
+:func:`~oceanloc.field.survey.estimates.survey_estimates` uses; the GPS error model is the survey's
 (:attr:`JournalSettings.gps_sigma_m`, ``gps_correlation_s``)."""
 
 FRESH_BELOW = 500
@@ -136,7 +136,7 @@ class SurveyState:
     Records are appended with :meth:`add_fixes`, :meth:`add_headings` and :meth:`add_ranges` (arrays or
     single values, any order; a record whose key is already held is ignored, as the journal ignores a
     re-add). :meth:`estimates` gives the same :class:`SurveyEstimates` as
-    :func:`~oceanloc.field.survey_journal.survey_estimates` on the same records (module docstring), and
+    :func:`~oceanloc.field.survey.estimates.survey_estimates` on the same records (module docstring), and
     :meth:`next_waypoint` the planner's next site from them.
     """
 
@@ -422,7 +422,7 @@ class SurveyState:
 
     def estimates(self) -> SurveyEstimates:
         """The current estimates (the same type and content as
-        :func:`~oceanloc.field.survey_journal.survey_estimates` on the same records).
+        :func:`~oceanloc.field.survey.estimates.survey_estimates` on the same records).
 
         Raises
         ------
@@ -508,5 +508,5 @@ class SurveyState:
 
     def next_waypoint(self, rng: np.random.Generator | None = None) -> Waypoint:
         """The survey planner's next site from the last fix with the current estimates
-        (:func:`~oceanloc.field.survey_journal.next_waypoint`)."""
+        (:func:`~oceanloc.field.survey.estimates.next_waypoint`)."""
         return next_waypoint(self.records(), self.settings, estimates=self.estimates(), rng=rng)

@@ -1,8 +1,8 @@
 import pytest
 
 from oceanloc.config.survey import PlannerSettings
-from oceanloc.config.survey_journal import JournalSettings
 from oceanloc.errors import ConfigError, DataError
+from oceanloc.field.survey.settings import JournalSettings
 from oceanloc.geo.enu import EnuOrigin
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from oceanloc.errors import DataError
-from oceanloc.io.journal import Journal, JournalError, append_gps_log, append_range_log
+from oceanloc.field.survey.journal import Journal, JournalError, append_gps_log, append_range_log
 from oceanloc.io.nmea import format_gga, format_hdt, format_zda, read_nmea
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import read_usbl
@@ -262,7 +262,7 @@ def test_a_journal_in_a_read_only_folder_is_read_and_a_write_says_why(tmp_path: 
     folder.chmod(0o555)
     try:
         code = (
-            "import sys\nfrom oceanloc.io.journal import Journal\n"
+            "import sys\nfrom oceanloc.field.survey.journal import Journal\n"
             "j = Journal.open(sys.argv[1])\nprint(j.read_only, j.records().n_fixes)\n"
             "try:\n    j.add_fix(1.7e9, 10.0, 10.0, 0.0)\n"
             "except Exception as e:\n    print(type(e).__name__, e)"

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from oceanloc.errors import DataError
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.journal import Journal
 from oceanloc.io.qc import QcReport
 
 T1 = 1.5e9
 WRITER = """
 import sys
-from oceanloc.io.journal import Journal
+from oceanloc.field.survey.journal import Journal
 from oceanloc.io.qc import QcReport
 j = Journal(sys.argv[1])
 for k in range(100000):
@@ -72,7 +72,7 @@ def _nmea_with_headings(path: Path) -> Path:
 
 
 def test_append_gps_log_counts_headings_and_conflicts(tmp_path: Path):
-    from oceanloc.io.journal import append_gps_log
+    from oceanloc.field.survey.journal import append_gps_log
     from oceanloc.io.nmea import read_nmea
 
     log = read_nmea(_nmea_with_headings(tmp_path / "g.nmea"))
@@ -146,7 +146,7 @@ def test_chunked_appends_count_and_report_as_one_record_at_a_time(tmp_path: Path
     # A range log repeating a key within the file (same value: already stored; another value:
     # conflicting, named in QC with the value stored first), appended in transactions of chunk_size
     # records: the same counts, QC lines (in file order) and stored rows whatever the chunking.
-    from oceanloc.io.journal import append_range_log
+    from oceanloc.field.survey.journal import append_range_log
     from oceanloc.io.usbl import RangeLog
 
     t = T1 + np.array([0.0, 1.0, 0.0, 0.0, 2.0, 1.0, 3.0])
@@ -176,7 +176,7 @@ def test_killed_bulk_add_commits_a_prefix_of_the_log(tmp_path: Path):
     writer = """
 import sys
 import numpy as np
-from oceanloc.io.journal import Journal, append_range_log
+from oceanloc.field.survey.journal import Journal, append_range_log
 from oceanloc.io.qc import QcReport
 from oceanloc.io.usbl import RangeLog
 n = 400_000
