@@ -44,7 +44,7 @@ import numpy as np
 
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrArray
 from oceanloc.errors import ConfigError
-from oceanloc.models.measurements import range_jacobian, range_m
+from oceanloc.estimation.factors import RangeFactor
 
 
 class WhitenedModel(Protocol):
@@ -232,13 +232,17 @@ class RangeProblem:
     def batch_size(self) -> int:
         return self.ranges_m.shape[0]
 
+    def factor(self) -> RangeFactor:
+        """The problem as one :class:`~oceanloc.estimation.factors.RangeFactor` on the block
+        ``transponder`` (the factor layer the USBL calibration stacks; the numbers are the same)."""
+        return RangeFactor(
+            target="transponder", ranges_m=self.ranges_m, sigma_m=self.sigma_m, mask=self.mask,
+            sensor_m=self.sensor_m,
+        )  # fmt: skip
+
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
-        sensors = self.sensor_m[rows]
-        weight = np.where(self.mask[rows], 1.0 / self.sigma_m[rows], 0.0)
-        target = x[:, None, :]
-        resid = (self.ranges_m[rows] - range_m(target, sensors)) * weight
-        jac = range_jacobian(target, sensors) * weight[..., None]
-        return resid, jac
+        lin = self.factor().linearize({"transponder": x}, rows)
+        return lin.residual, lin.jacobians[0]
 
 
 def solve_map(
