@@ -126,7 +126,7 @@ def test_simulate_drift_follow_and_swap(tmp_path):
 def test_bad_scenario_is_one_line_with_status_2(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(
-        '[scenario]\nname = "x"\n[currents]\nkind = "tidal"\n'
+        '[scenario]\nname = "x"\n[currents]\nkind = "whirlpool"\n'
         "[route]\nstart_m = [0.0, 0.0]\ngoal_m = [1.0, 1.0]\n"
     )
     with pytest.raises(SystemExit) as info:

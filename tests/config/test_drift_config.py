@@ -57,7 +57,7 @@ def test_a_minimal_file(tmp_path):
 @pytest.mark.parametrize(
     ("old", "new", "message"),
     [
-        ('kind = "uniform"', 'kind = "tidal"', r"\[currents\] field 'kind': must be one of"),
+        ('kind = "uniform"', 'kind = "whirlpool"', r"\[currents\] field 'kind': must be one of"),
         ("x_m = [400.0, 600.0]", "x_m = [600.0, 400.0]", r"\[map.rectangles\[0\]\] field 'x_m'"),
         (
             "start_m = [100.0, 100.0]",

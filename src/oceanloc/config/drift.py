@@ -9,11 +9,16 @@ and the path-following trial::
     description = "..."
 
     [currents]
-    kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | netcdf
+    kind = "thesis-vortex"         # thesis-vortex | vortex | double-gyre | uniform | tidal | linear |
+                                   # rankine | netcdf
     interpolation = "cell"         # thesis-vortex: cell (the thesis' lookup) | linear
     # vortex: scale_m; double-gyre: length_m, amplitude_mps, epsilon, period_h, origin_m;
     # uniform: velocity_mps = [u, v];
-    # netcdf: path (relative to this file), u, v, depth_index, origin_lonlat_deg
+    # tidal: mean_mps = [u, v], amplitude_mps = [u, v], period_h, phase_deg (uniform, oscillating);
+    # linear: matrix_per_s = [[a, b], [c, d]], offset_mps = [u, v] (v = A p + b: shear, strain);
+    # rankine: centre_m, core_radius_m, peak_speed_mps, pulse, period_h, background_mps;
+    # netcdf: path (relative to this file; a NetCDF file or a Zarr store), u, v, depth_m or depth_index,
+    # time_window = ["2024-03-01T00:00:00", "2024-03-02T00:00:00"], origin_lonlat_deg
 
     [drift]
     integrator = "euler"           # euler (the thesis) | rk4
@@ -37,6 +42,7 @@ and the path-following trial::
     start_time_s = 0.0             # start time in the field's clock (s; a double gyre's phase, or
                                    # seconds after a netcdf product's first slice); netcdf may give
     # start_time = "2024-01-01T06:00:00" instead (ISO 8601, within the product's time axis)
+    # start_lonlat_deg = [-117.3, 32.6] and goal_lonlat_deg instead of start_m/goal_m (lon/lat products)
 
     [vehicle]                      # Table 1 and (IV.14)
     flight_power_w = 200.0
@@ -44,6 +50,8 @@ and the path-following trial::
     max_flight_time_s = 120.0
     nautical_mile_m = 1852.0       # 2000 only to reproduce the thesis' energies
     flight_legs = "hop"            # hop: legs of at most one hop; any: any length (thesis accounting)
+    propulsion = "air"             # air: flights unaffected by the current (the AquaQuad); water: a boat
+                                   # moving at flight_speed_kn through the water, carried by the current
 
     [hdop]                         # flock geometry of the HDOP cost term (bearing-only, as the thesis)
     others_m = [[5000.0, 5000.0], [5000.0, -5000.0], [-5000.0, -5000.0]]
@@ -53,6 +61,8 @@ and the path-following trial::
     kind = "oceanloc"              # oceanloc | thesis-single | thesis-optimality-seeking
     seed = 1
     time_weight_wh_per_h = 0.0     # price of time in the oceanloc planner (0: flight energy only)
+    objective = "energy"           # energy: flight energy plus the price of time; time: arrive first
+    deadline_h = 12.0              # optional: reach the goal within this many hours of the start
 
     [following]                    # path following in a "true" current (V.D)
     watch_circle_m = 150.0
@@ -69,53 +79,43 @@ and the path-following trial::
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from oceanloc.config.builtin import builtin_folder, builtin_names, resolve_scenario
+from oceanloc.config.drift_currents import (
+    MAX_COORD_M,
+    MAX_CURRENT_MPS,
+    MAX_DT_S,
+    MAX_HORIZON_H,
+    MAX_HORIZON_STEPS,
+    MAX_LENGTH_M,
+    MAX_SEED,
+    MIN_DT_S,
+    CurrentSettings,
+    _coords,
+    _currents,
+)
 from oceanloc.config.toml_fields import Table
 from oceanloc.errors import ConfigError
 from oceanloc.geo.projection import LocalProjection
-from oceanloc.models.currents import (
-    CurrentField,
-    DoubleGyreCurrent,
-    UniformCurrent,
-    VortexCurrent,
-    thesis_vortex_grid,
-    time_span_s,
-)
-from oceanloc.models.currents_cf import land_obstacles, open_current_netcdf
+from oceanloc.models.currents import CurrentField, time_span_s
 from oceanloc.models.drift import METHODS, Method
 from oceanloc.models.energy import EnergyBudget
-from oceanloc.models.obstacles import ObstacleMap, OccupancyGrid
+from oceanloc.models.obstacles import ObstacleMap
+from oceanloc.models.powered import PROPULSIONS, Propulsion
 from oceanloc.planning.drift_rrt.lattice import check_lattice_memory
 from oceanloc.planning.drift_rrt.objective import HdopTerm
-from oceanloc.planning.drift_rrt.oceanloc_planner import DEFAULT_OPTIONS
+from oceanloc.planning.drift_rrt.oceanloc_planner import DEFAULT_OPTIONS, needs_time
 from oceanloc.planning.drift_rrt.planner import DriftPlannerName, parse_planner_name
-from oceanloc.planning.drift_rrt.problem import DriftProblem
+from oceanloc.planning.drift_rrt.problem import OBJECTIVES, DriftProblem, Objective
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
+from oceanloc.planning.drift_rrt.time_plan import DEFAULT_TIME_OPTIONS
+from oceanloc.planning.drift_rrt.time_values import TimeLattice
 from oceanloc.units import DEG
-
-CURRENT_KINDS = ("thesis-vortex", "vortex", "double-gyre", "uniform", "netcdf")
-
-# Physical ranges of the scenario fields (every value outside is a one-line error naming the field).
-MAX_CURRENT_MPS = 10.0
-"""Fastest current accepted, m/s (the strongest tidal races run at about 5 m/s)."""
-MAX_COORD_M = 1e7
-"""Largest coordinate of a local frame, metres (a quarter of the Earth's circumference)."""
-MAX_LENGTH_M = 1e6
-"""Largest length scale of an analytic field, metres."""
-MIN_DT_S, MAX_DT_S = 1.0, 3600.0
-"""Drift step range, seconds."""
-MAX_HORIZON_H = 24.0 * 30
-"""Longest drift horizon, hours (a month)."""
-MAX_HORIZON_STEPS = 200_000
-"""Most drift steps in one horizon (horizon / step)."""
-MAX_SEED = 2**63 - 1
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -180,6 +180,12 @@ class DriftScenario:
     energy : EnergyBudget
     max_leg_m : float or None
         Longest flight leg (one hop) or ``None`` for flights of any length.
+    propulsion : {"air", "water"}
+        What powered legs move through (:mod:`oceanloc.models.powered`).
+    objective : {"energy", "time"}
+        What the oceanloc planner minimizes.
+    max_duration_s : float or None
+        Deadline after the start, seconds (energy with a deadline), or ``None``.
     hdop_others_m : (n, 2) float or None
         Other flock members for the HDOP term.
     hdop_target_m : (2,) float or None
@@ -192,6 +198,10 @@ class DriftScenario:
     following : FollowingSettings
     projection : LocalProjection or None
         Local frame of a longitude/latitude current product (plans are written in lon/lat too).
+    ensemble : tuple of CurrentField
+        The members of an ensemble forecast (``current`` is their mean); empty for one forecast.
+    time_origin : str or None
+        The product's first time slice (ISO 8601), time 0 of ``start_time_s``.
     currents_description : str
     data_files : tuple of str
         Data files the scenario reads (a current product), for provenance.
@@ -213,6 +223,9 @@ class DriftScenario:
     start_time_s: float = 0.0
     energy: EnergyBudget = field(default_factory=EnergyBudget)
     max_leg_m: float | None = None
+    propulsion: Propulsion = "air"
+    objective: Objective = "energy"
+    max_duration_s: float | None = None
     hdop_others_m: np.ndarray | None = None
     hdop_target_m: np.ndarray | None = None
     planner: DriftPlannerName = "oceanloc"
@@ -222,6 +235,8 @@ class DriftScenario:
     projection: LocalProjection | None = None
     currents_description: str = ""
     data_files: tuple[str, ...] = ()
+    ensemble: tuple[CurrentField, ...] = ()
+    time_origin: str | None = None
     toml_text: str = field(default="", repr=False)
 
 
@@ -257,111 +272,13 @@ def check_planning_memory(scenario: DriftScenario, source: str) -> None:
     which of them to change.
     """
     try:
-        check_lattice_memory(problem_from_scenario(scenario), DEFAULT_OPTIONS)
+        problem = problem_from_scenario(scenario)
+        if needs_time(problem):
+            TimeLattice(problem, DEFAULT_TIME_OPTIONS, np.zeros(2)).check_memory()
+        else:
+            check_lattice_memory(problem, DEFAULT_OPTIONS)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class CurrentSettings:
-    """``[currents]``: the planning current, its georeference, a one-line description, land cells."""
-
-    field: CurrentField
-    projection: LocalProjection | None
-    description: str
-    land: OccupancyGrid | None = None
-    data_files: tuple[str, ...] = ()
-    time_origin: str | None = None
-
-
-def _currents(t: Table, base_dir: Path) -> CurrentSettings:
-    kind = t.str("kind", "thesis-vortex", choices=CURRENT_KINDS)
-    if kind == "thesis-vortex":
-        interp = t.str("interpolation", "cell", choices=("cell", "linear"))
-        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
-        f: CurrentField = thesis_vortex_grid(interp, scale_m=scale)  # type: ignore[arg-type]
-        how = "piecewise constant per cell" if interp == "cell" else "bilinear"
-        return CurrentSettings(
-            field=f, projection=None, description=f"thesis vortex sampled every {0.05 * scale:g} m ({how})"
-        )
-    if kind == "vortex":
-        scale = t.float("scale_m", 10_000.0, lo=1.0, hi=MAX_LENGTH_M)
-        half = t.float("half_width_m", 0.5 * scale, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
-        return CurrentSettings(
-            field=VortexCurrent(scale_m=scale, half_width_m=half),
-            projection=None,
-            description=f"analytic thesis vortex (scale {scale:g} m)",
-        )
-    if kind == "double-gyre":
-        length = t.float("length_m", 5000.0, lo=1.0, hi=MAX_LENGTH_M)
-        amp = t.float("amplitude_mps", 0.5, lo=0.0, hi=MAX_CURRENT_MPS)
-        eps = t.float("epsilon", 0.0, lo=0.0, hi=1.0)
-        period_h = t.float("period_h", 24.0, lo=0.01, hi=24.0 * 365)
-        origin = _coords(t, "origin_m", 2, [0.0, 0.0])
-        f = DoubleGyreCurrent(
-            length_m=length,
-            amplitude_mps=amp,
-            epsilon=eps,
-            omega_rad_s=2 * math.pi / (period_h * 3600.0),
-            origin_m=(float(origin[0]), float(origin[1])),
-        )
-        desc = f"double gyre L = {length:g} m, A = {amp:g} m/s, eps = {eps:g}"
-        return CurrentSettings(field=f, projection=None, description=desc)
-    if kind == "uniform":
-        vel = t.vector("velocity_mps", 2)
-        if not np.all(np.abs(vel) <= MAX_CURRENT_MPS):
-            raise t.error(
-                "velocity_mps",
-                f"components must lie within [-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}] m/s, "
-                f"got {vel.tolist()}",
-            )
-        return CurrentSettings(
-            field=UniformCurrent(velocity_mps=(float(vel[0]), float(vel[1]))),
-            projection=None,
-            description=f"uniform {vel.tolist()} m/s",
-        )
-    return _netcdf_currents(t, base_dir)
-
-
-def _netcdf_currents(t: Table, base_dir: Path) -> CurrentSettings:
-    rel = t.str("path")
-    path = Path(rel) if Path(rel).is_absolute() else base_dir / rel
-    u = t.str("u", "") or None
-    v = t.str("v", "") or None
-    depth = t.int("depth_index", -1, lo=-1)
-    origin = t.vector("origin_lonlat_deg", 2, []) if t.has("origin_lonlat_deg") else None
-    if origin is not None and not (-180.0 <= origin[0] <= 360.0 and -90.0 <= origin[1] <= 90.0):
-        raise t.error(
-            "origin_lonlat_deg",
-            f"must be [lon, lat] within [-180, 360] and [-90, 90] degrees, got {origin.tolist()}",
-        )
-    interp = t.str("interpolation", "linear", choices=("cell", "linear"))
-    product = open_current_netcdf(
-        path,
-        u_var=u,
-        v_var=v,
-        depth_index=None if depth < 0 else depth,
-        origin_lonlat_deg=None if origin is None else (float(origin[0]), float(origin[1])),
-        interpolation=interp,  # type: ignore[arg-type]
-    )
-    f = product.field
-    with np.errstate(invalid="ignore"):
-        peak = float(np.nanmax(np.hypot(f.u_mps, f.v_mps))) if np.isfinite(f.u_mps).any() else 0.0
-    if not peak <= MAX_CURRENT_MPS:
-        raise t.error(
-            "path",
-            f"{path.name} holds currents up to {peak:.3g} m/s; speeds must lie within "
-            f"[0, {MAX_CURRENT_MPS:g}] m/s "
-            "(check the variables' units and fill values)",
-        )
-    return CurrentSettings(
-        field=product.field,
-        projection=product.projection,
-        description=product.description,
-        land=land_obstacles(product.field),
-        data_files=(str(path),),
-        time_origin=product.time_origin,
-    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -395,16 +312,6 @@ class MapSettings:
 
     obstacles: ObstacleMap
     flights_avoid_obstacles: bool
-
-
-def _coords(t: Table, key: str, length: int, default: object = None) -> np.ndarray:
-    """A vector of ``length`` finite coordinates (m) within plus or minus :data:`MAX_COORD_M`."""
-    value = t.vector(key, length) if default is None else t.vector(key, length, default)
-    if not np.all(np.abs(value) <= MAX_COORD_M):
-        raise t.error(
-            key, f"coordinates must lie within [-{MAX_COORD_M:g}, {MAX_COORD_M:g}] m, got {value.tolist()}"
-        )
-    return value
 
 
 def _map_bounds(t: Table, default_bounds: tuple[float, float, float, float] | None) -> np.ndarray:
@@ -524,8 +431,8 @@ def _start_time(t: Table, currents: CurrentSettings, horizon_s: float) -> float:
 
 
 def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettings:
-    start = _coords(t, "start_m", 2)
-    goal = _coords(t, "goal_m", 2)
+    start = _position(t, "start", currents.projection)
+    goal = _position(t, "goal", currents.projection)
     tol = t.float("goal_tolerance_m", 100.0, lo=0.0, lo_open=True, hi=MAX_LENGTH_M)
     gap = float(np.linalg.norm(goal - start))
     if gap < tol:
@@ -540,6 +447,22 @@ def _route(t: Table, currents: CurrentSettings, horizon_s: float) -> RouteSettin
     return RouteSettings(start_m=start, goal_m=goal, goal_tolerance_m=tol, start_time_s=t0)
 
 
+def _position(t: Table, what: str, projection: LocalProjection | None) -> np.ndarray:
+    """``{what}_m`` (metres in the local frame) or ``{what}_lonlat_deg`` (a product's longitude/latitude)."""
+    key_m, key_ll = f"{what}_m", f"{what}_lonlat_deg"
+    if t.has(key_ll):
+        if t.has(key_m):
+            raise t.error(key_ll, f"give {key_m} or {key_ll}, not both")
+        if projection is None:
+            raise t.error(key_ll, "needs a longitude/latitude current product; use " + key_m)
+        lonlat = t.vector(key_ll, 2)
+        if not (-360.0 <= lonlat[0] <= 360.0 and -90.0 < lonlat[1] < 90.0):
+            raise t.error(key_ll, f"must be [lon, lat] in degrees, got {lonlat.tolist()}")
+        x, y = projection.to_local(lonlat[0], lonlat[1])
+        return np.array([float(x), float(y)])
+    return _coords(t, key_m, 2)
+
+
 def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None:
     """Start and goal must be free states of the map."""
     for key, point in (("start_m", route.start_m), ("goal_m", route.goal_m)):
@@ -549,10 +472,12 @@ def _check_route(t: Table, route: RouteSettings, obstacles: ObstacleMap) -> None
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class VehicleSettings:
-    """``[vehicle]``: the energy budget (Table 1, IV.14) and the longest flight leg (m, ``None``: any)."""
+    """``[vehicle]``: the energy budget (Table 1, IV.14), the longest flight leg (m, ``None``: any) and what
+    powered legs move through."""
 
     energy: EnergyBudget
     max_leg_m: float | None
+    propulsion: Propulsion = "air"
 
 
 def _vehicle(t: Table) -> VehicleSettings:
@@ -567,8 +492,13 @@ def _vehicle(t: Table) -> VehicleSettings:
         nautical_mile_m=t.float("nautical_mile_m", 1852.0, lo=1000.0, hi=3000.0),
     )
     legs = t.str("flight_legs", "hop", choices=("hop", "any"))
+    propulsion = t.str("propulsion", "air", choices=PROPULSIONS)
     t.check_unknown()
-    return VehicleSettings(energy=energy, max_leg_m=energy.max_hop_m if legs == "hop" else None)
+    return VehicleSettings(
+        energy=energy,
+        max_leg_m=energy.max_hop_m if legs == "hop" and propulsion == "air" else None,
+        propulsion=propulsion,  # type: ignore[arg-type]
+    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -599,20 +529,39 @@ def _hdop(t: Table) -> HdopSettings:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class PlannerSettings:
-    """``[planner]``: default planner, its seed, and the price of time (Wh per hour)."""
+    """``[planner]``: default planner, its seed, the price of time (Wh per hour), the objective and the
+    deadline (s after the start, or ``None``)."""
 
     planner: DriftPlannerName
     seed: int
     time_weight_wh_per_h: float
+    objective: Objective = "energy"
+    max_duration_s: float | None = None
 
 
-def _planner_settings(t: Table) -> PlannerSettings:
+def _planner_settings(t: Table, horizon_s: float) -> PlannerSettings:
     raw = t.str("kind", "oceanloc")
     planner = parse_planner_name(raw, t.where("kind") + ":")
     seed = t.int("seed", 1, lo=0, hi=MAX_SEED)
     time_weight = t.float("time_weight_wh_per_h", 0.0, lo=0.0, hi=1e4)
+    objective = t.str("objective", "energy", choices=OBJECTIVES)
+    deadline = None
+    if t.has("deadline_h"):
+        deadline = t.float("deadline_h", 12.0, lo=0.0, lo_open=True, hi=MAX_HORIZON_H) * 3600.0
+        if deadline > horizon_s + 1e-6:
+            raise t.error(
+                "deadline_h",
+                f"{deadline / 3600:g} h is beyond the planning horizon "
+                f"([drift] horizon_h = {horizon_s / 3600:g} h)",
+            )
     t.check_unknown()
-    return PlannerSettings(planner=planner, seed=seed, time_weight_wh_per_h=time_weight)
+    return PlannerSettings(
+        planner=planner,
+        seed=seed,
+        time_weight_wh_per_h=time_weight,
+        objective=objective,  # type: ignore[arg-type]
+        max_duration_s=deadline,
+    )
 
 
 def _following(t: Table) -> FollowingSettings:
@@ -651,7 +600,7 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
     route = _route(route_t, currents, drift.horizon_s)
     vehicle = _vehicle(root.table("vehicle", required=False))
     hdop = _hdop(root.table("hdop", required=False))
-    planner = _planner_settings(root.table("planner", required=False))
+    planner = _planner_settings(root.table("planner", required=False), drift.horizon_s)
     following = _following(root.table("following", required=False))
     root.check_unknown()
     _check_route(route_t, route, map_.obstacles)
@@ -670,6 +619,9 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         start_time_s=route.start_time_s,
         energy=vehicle.energy,
         max_leg_m=vehicle.max_leg_m,
+        propulsion=vehicle.propulsion,
+        objective=planner.objective,
+        max_duration_s=planner.max_duration_s,
         hdop_others_m=hdop.others_m,
         hdop_target_m=hdop.target_m,
         planner=planner.planner,
@@ -679,6 +631,8 @@ def drift_scenario_from_table(root: Table, base_dir: Path | None = None) -> Drif
         projection=currents.projection,
         currents_description=currents.description,
         data_files=currents.data_files,
+        ensemble=currents.members,
+        time_origin=currents.time_origin,
     )
     if scenario.planner == "oceanloc":
         check_planning_memory(scenario, root.source)
@@ -704,4 +658,7 @@ def problem_from_scenario(scenario: DriftScenario) -> DriftProblem:
         max_leg_m=scenario.max_leg_m,
         time_weight_wh_per_h=scenario.time_weight_wh_per_h,
         t0_s=scenario.start_time_s,
+        objective=scenario.objective,
+        max_duration_s=scenario.max_duration_s,
+        propulsion=scenario.propulsion,
     )

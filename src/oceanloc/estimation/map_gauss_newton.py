@@ -45,7 +45,7 @@ import numpy as np
 from oceanloc import _validate
 from oceanloc._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrArray
 from oceanloc.errors import ArgumentError, ConfigError
-from oceanloc.models.measurements import range_jacobian, range_m
+from oceanloc.estimation.factors import RangeFactor
 
 
 class WhitenedModel(Protocol):
@@ -247,13 +247,17 @@ class RangeProblem:
     def batch_size(self) -> int:
         return self.ranges_m.shape[0]
 
+    def factor(self) -> RangeFactor:
+        """The problem as one :class:`~oceanloc.estimation.factors.RangeFactor` on the block
+        ``transponder`` (the factor layer the USBL calibration stacks; the numbers are the same)."""
+        return RangeFactor(
+            target="transponder", ranges_m=self.ranges_m, sigma_m=self.sigma_m, mask=self.mask,
+            sensor_m=self.sensor_m,
+        )  # fmt: skip
+
     def evaluate(self, x: FloatArray, rows: IntArray) -> tuple[FloatArray, FloatArray]:
-        sensors = self.sensor_m[rows]
-        weight = np.where(self.mask[rows], 1.0 / self.sigma_m[rows], 0.0)
-        target = x[:, None, :]
-        resid = (self.ranges_m[rows] - range_m(target, sensors)) * weight
-        jac = range_jacobian(target, sensors) * weight[..., None]
-        return resid, jac
+        lin = self.factor().linearize({"transponder": x}, rows)
+        return lin.residual, lin.jacobians[0]
 
 
 def solve_map(
@@ -296,7 +300,8 @@ def solve_map(
     if problem.batch_size != batch:
         raise ConfigError(f"prior has {batch} problems but the measurements have {problem.batch_size}")
     cov = np.asarray(prior.cov, dtype=float)
-    if cov.ndim < 2 or cov.shape[-2:] != (dim, dim) or cov.ndim > 3 or (cov.ndim == 3 and cov.shape[0] not in (1, batch)):
+    stacked = cov.ndim == 3 and cov.shape[0] in (1, batch)
+    if cov.shape[-2:] != (dim, dim) or not (cov.ndim == 2 or stacked):
         raise ArgumentError(
             f"prior.cov: shape {cov.shape}, expected ({dim}, {dim}) or ({batch}, {dim}, {dim})"
         )

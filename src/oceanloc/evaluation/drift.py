@@ -23,6 +23,7 @@ from oceanloc.config.drift import DriftScenario, problem_from_scenario
 from oceanloc.errors import ConfigError
 from oceanloc.evaluation.montecarlo import concat_runs, run_chunked
 from oceanloc.models.paths import PathEnergy
+from oceanloc.planning.drift_rrt.ensemble import EnsemblePlan, plan_for_ensemble
 from oceanloc.planning.drift_rrt.planner import (
     PLANNER_NAMES,
     DriftPlannerName,
@@ -315,6 +316,9 @@ class ScenarioPlan:
         The plan; DR-RRT* planners keep their search tree (for the figure).
     energy : PathEnergy or None
         Energy account of the plan (IV.14), ``None`` when no path was found.
+    ensemble : EnsemblePlan or None
+        For an ensemble forecast: every candidate plan flown in every member (the chosen one is
+        ``result``).
     """
 
     scenario: DriftScenario
@@ -323,6 +327,7 @@ class ScenarioPlan:
     problem: DriftProblem
     result: DriftPlanResult
     energy: PathEnergy | None
+    ensemble: EnsemblePlan | None = None
 
     def summary(self) -> dict[str, Any]:
         """Scenario, planner, status, flight energy (Wh) and unit convention (GeoJSON properties)."""
@@ -345,8 +350,13 @@ class ScenarioPlan:
             "goal_m": self.problem.goal_m.tolist(),
             "goal_tolerance_m": self.problem.goal_tolerance_m,
             "convention": self.problem.energy.convention,
+            "objective": self.problem.objective,
+            "objective_unit": self.problem.objective_unit,
+            "start_time_s": self.problem.t0_s,
+            "time_origin": self.scenario.time_origin,
             "result": self.result.to_record(),
             "energy": None if self.energy is None else self.energy.to_record(),
+            "ensemble": None if self.ensemble is None else self.ensemble.to_record(),
         }
 
 
@@ -367,7 +377,12 @@ def plan_scenario(
     problem = problem_from_scenario(scenario)
     s = scenario.seed if seed is None else seed
     rng = np.random.default_rng(s)
-    if name == "oceanloc":
+    ensemble = None
+    if scenario.ensemble:
+        planner_fn = make_planner(name, iterations)
+        ensemble = plan_for_ensemble(problem, scenario.ensemble, planner_fn, rng)
+        result = ensemble.result
+    elif name == "oceanloc":
         result = make_planner(name)(problem, rng)
     else:
         if problem.hdop is None:
@@ -375,7 +390,15 @@ def plan_scenario(
         mode: ThesisMode = "single" if name == "thesis-single" else "optimality-seeking"
         budget = PlanBudget(max_iterations=iterations) if iterations else None
         result = plan_thesis(problem, rng, budget, ThesisOptions(mode=mode, keep_tree=True))
-    energy = None if result.path is None else result.path.energy(problem.energy)
+    energy = (
+        None if result.path is None else result.path.energy(problem.energy, through_water=problem.in_water)
+    )
     return ScenarioPlan(
-        scenario=scenario, planner=name, seed=s, problem=problem, result=result, energy=energy
+        scenario=scenario,
+        planner=name,
+        seed=s,
+        problem=problem,
+        result=result,
+        energy=energy,
+        ensemble=ensemble,
     )

@@ -42,7 +42,15 @@ from urllib.parse import parse_qs, urlsplit
 
 from oceanloc.errors import ConfigError
 from oceanloc.io._mavlink import mavlink, mavutil
+from oceanloc.io.missions import MissionItem, waypoint
 from oceanloc.io.qc import QcReport
+
+_INT_FRAMES = {
+    mavlink.MAV_FRAME_GLOBAL: mavlink.MAV_FRAME_GLOBAL_INT,
+    mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT: mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+    mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT: mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT,
+}
+"""``MISSION_ITEM_INT`` carries integer latitude/longitude in the ``_INT`` twin of each global frame."""
 
 ROVER_MODES: dict[str, int] = {"MANUAL": 0, "HOLD": 4, "LOITER": 5, "AUTO": 10, "GUIDED": 15}
 """ArduPilot Rover custom modes (``HEARTBEAT.custom_mode``) this adapter uses, name -> number."""
@@ -591,10 +599,16 @@ class MavlinkVehicle:
                     status="rejected", message="mission: no position yet for home", n_items=0, resends=0
                 )
             home = (fix.lat_deg, fix.lon_deg)
-        points = [home, *waypoints_lat_lon_deg]
-        for lat, lon in points:
+        return self.upload_mission_items([waypoint(lat, lon) for lat, lon in [home, *waypoints_lat_lon_deg]])
+
+    def upload_mission_items(self, items: Sequence[MissionItem]) -> MissionUploadResult:
+        """Upload mission items (:class:`~oceanloc.io.missions.MissionItem`, item 0 home): waypoints, holds,
+        take-offs, landings (a drift plan's mission, :func:`oceanloc.io.missions.drift_mission`)."""
+        for it in items:
+            lat, lon = it.lat_deg, it.lon_deg
             if not (math.isfinite(lat) and math.isfinite(lon) and -90 <= lat <= 90 and -180 <= lon <= 180):
                 raise ConfigError(f"mission waypoint {lat}, {lon}: latitude or longitude out of range")
+        points = list(items)
         n = len(points)
 
         def is_answer(msg) -> bool:
@@ -606,12 +620,14 @@ class MavlinkVehicle:
             self._send("MISSION_COUNT", lambda mav, s, c: mav.mission_count_send(s, c, n, 0))
 
         def send_item(seq: int) -> None:
-            lat, lon = points[seq]
+            it = points[seq]
+            frame = _INT_FRAMES.get(it.frame, it.frame)
+            p1, p2, p3, p4 = it.params
             self._send(
                 "MISSION_ITEM_INT",
                 lambda mav, s, c: mav.mission_item_int_send(
-                    s, c, seq, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, mavlink.MAV_CMD_NAV_WAYPOINT,
-                    0, 1, 0.0, 0.0, 0.0, math.nan, round(lat * 1e7), round(lon * 1e7), 0.0, 0,
+                    s, c, seq, frame, it.command, 0, int(it.autocontinue), p1, p2, p3, p4,
+                    round(it.lat_deg * 1e7), round(it.lon_deg * 1e7), it.alt_m, 0,
                 ),
             )  # fmt: skip
 

@@ -66,9 +66,17 @@ def _version() -> str:
 
 
 def file_sha256(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
+    """SHA-256 (hex) of a file's bytes; of a directory (a Zarr store), of every file's relative path and
+    bytes in sorted order."""
+    root = Path(path)
+    if root.is_dir():
+        digest = hashlib.sha256()
+        for f in sorted(q for q in root.rglob("*") if q.is_file()):
+            digest.update(str(f.relative_to(root)).encode("utf-8") + b"\0")
+            digest.update(file_sha256(f).encode("ascii"))
+        return digest.hexdigest()
     digest = hashlib.sha256()
-    with Path(path).open("rb") as fh:
+    with root.open("rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()

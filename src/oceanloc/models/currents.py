@@ -23,6 +23,10 @@ Fields
   test field with known structure.
 - :class:`GridCurrent`: any regular grid in metres, with optional time axis; gridded products (CF NetCDF)
   arrive here through :mod:`oceanloc.models.currents_cf`.
+- :class:`TidalCurrent`: the same velocity everywhere, oscillating in time (a tidal stream); with its exact
+  displacement it gives Zermelo's time-optimal navigation in closed form.
+- :class:`RankineVortexCurrent`: a Rankine vortex (solid-body core, irrotational outside) whose strength
+  pulses in time and whose centre is carried by a background current.
 """
 
 from __future__ import annotations
@@ -126,6 +130,105 @@ class LinearCurrent(_FieldBase):
         return a * x_m + b * y_m + self.offset_mps[0], c * x_m + d * y_m + self.offset_mps[1]
 
 
+@dataclass(frozen=True, slots=True, kw_only=True)
+class TidalCurrent(_FieldBase):
+    """A uniform current oscillating in time: ``w(t) = mean + amplitude sin(2 pi t / period + phase)``.
+
+    Attributes
+    ----------
+    mean_mps, amplitude_mps : (2,) float
+        Mean and amplitude of the east and north components, m/s.
+    period_s : float
+        Period (44 714 s for the M2 tide).
+    phase_rad : float
+    """
+
+    mean_mps: tuple[float, float] = (0.0, 0.0)
+    amplitude_mps: tuple[float, float] = (0.0, 0.0)
+    period_s: float = 44_714.0
+    phase_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.period_s > 0:
+            raise ConfigError(f"tidal period must be positive, got {self.period_s}")
+
+    def velocity_xy(self, x_m: Scalar, y_m: Scalar, time_s: Scalar = 0.0) -> tuple[Scalar, Scalar]:
+        w = 2.0 * math.pi / self.period_s
+        if isinstance(x_m, float | int) and isinstance(time_s, float | int):
+            k = math.sin(w * time_s + self.phase_rad)
+            return self.mean_mps[0] + self.amplitude_mps[0] * k, self.mean_mps[1] + self.amplitude_mps[1] * k
+        k = np.sin(w * np.asarray(time_s, dtype=float) + self.phase_rad)
+        shape = np.broadcast_shapes(np.shape(x_m), np.shape(y_m), np.shape(k))
+        u = np.broadcast_to(self.mean_mps[0] + self.amplitude_mps[0] * k, shape).astype(float)
+        v = np.broadcast_to(self.mean_mps[1] + self.amplitude_mps[1] * k, shape).astype(float)
+        return u, v
+
+    def displacement_m(self, t0_s: ArrayLike, t1_s: ArrayLike) -> FloatArray:
+        """``(..., 2)`` exact displacement of a drifter from ``t0`` to ``t1``: the integral of ``w``."""
+        t0 = np.asarray(t0_s, dtype=float)
+        t1 = np.asarray(t1_s, dtype=float)
+        w = 2.0 * math.pi / self.period_s
+        osc = (np.cos(w * t0 + self.phase_rad) - np.cos(w * t1 + self.phase_rad)) / w
+        return np.stack(
+            [self.mean_mps[i] * (t1 - t0) + self.amplitude_mps[i] * osc for i in range(2)], axis=-1
+        )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RankineVortexCurrent(_FieldBase):
+    """A Rankine vortex whose strength pulses and whose centre drifts with a background current.
+
+    Around the centre ``c(t) = centre + background t`` the azimuthal speed is ``V(t) r / R`` inside the core
+    (radius ``R``, solid-body rotation) and ``V(t) R / r`` outside (irrotational), counter-clockwise for
+    ``V > 0``, with ``V(t) = peak (1 + pulse sin(2 pi t / period))``; the background current is added
+    everywhere, so the vortex is carried by the flow it sits in (an eddy shed by a headland).
+
+    Attributes
+    ----------
+    centre_m : (2,) float
+    core_radius_m : float
+    peak_speed_mps : float
+    pulse : float
+        Relative amplitude of the strength's oscillation (0: steady strength).
+    period_s : float
+    background_mps : (2,) float
+    """
+
+    centre_m: tuple[float, float] = (0.0, 0.0)
+    core_radius_m: float = 2000.0
+    peak_speed_mps: float = 0.5
+    pulse: float = 0.0
+    period_s: float = 21_600.0
+    background_mps: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if not (self.core_radius_m > 0 and self.period_s > 0):
+            raise ConfigError("a Rankine vortex needs a positive core radius and period")
+
+    def velocity_xy(self, x_m: Scalar, y_m: Scalar, time_s: Scalar = 0.0) -> tuple[Scalar, Scalar]:
+        bu, bv = self.background_mps
+        t = np.asarray(time_s, dtype=float)
+        if t.ndim == 0:
+            tf = float(t)
+            strength = self.peak_speed_mps * (1.0 + self.pulse * math.sin(2.0 * math.pi * tf / self.period_s))
+            cx, cy = self.centre_m[0] + bu * tf, self.centre_m[1] + bv * tf
+        else:
+            strength = self.peak_speed_mps * (1.0 + self.pulse * np.sin((2.0 * math.pi / self.period_s) * t))
+            cx, cy = self.centre_m[0] + bu * t, self.centre_m[1] + bv * t
+        dx = np.asarray(x_m, dtype=float) - cx
+        dy = np.asarray(y_m, dtype=float) - cy
+        r2 = dx * dx + dy * dy
+        big_r = self.core_radius_m
+        # v_theta / r: V / R inside the core, V R / r^2 outside.
+        k = np.maximum(r2, big_r * big_r)
+        k = (strength * big_r) / k
+        u = bu - k * dy
+        v = bv + k * dx
+        if np.ndim(u) == 0:
+            return float(u), float(v)
+        return u, v
+
+
 THESIS_VORTEX_SCALE_M = 10_000.0
 """The thesis scales its unit-square vortex mesh by 10 km (``SF = 10000``)."""
 
@@ -146,6 +249,10 @@ def is_steady(field: CurrentField) -> bool:
         return field.epsilon == 0.0 or field.omega_rad_s == 0.0
     if isinstance(field, GridCurrent):
         return field.time_s is None or field.time_s.size < 2
+    if isinstance(field, TidalCurrent):
+        return field.amplitude_mps == (0.0, 0.0)
+    if isinstance(field, RankineVortexCurrent):
+        return field.pulse == 0.0 and field.background_mps == (0.0, 0.0)
     return False
 
 
@@ -232,22 +339,51 @@ class DoubleGyreCurrent(_FieldBase):
     origin_m: tuple[float, float] = (0.0, 0.0)
 
     def velocity_xy(self, x_m: Scalar, y_m: Scalar, time_s: Scalar = 0.0) -> tuple[Scalar, Scalar]:
-        length = self.length_m
-        s = (np.asarray(x_m, dtype=float) - self.origin_m[0]) / length
-        r = (np.asarray(y_m, dtype=float) - self.origin_m[1]) / length
-        a = self.epsilon * np.sin(self.omega_rad_s * np.asarray(time_s, dtype=float))
+        if isinstance(x_m, float | int) and isinstance(y_m, float | int) and isinstance(time_s, float | int):
+            return self._scalar(float(x_m), float(y_m), float(time_s))
+        inv = 1.0 / self.length_m
+        s = (np.asarray(x_m, dtype=float) - self.origin_m[0]) * inv
+        r = (np.asarray(y_m, dtype=float) - self.origin_m[1]) * inv
+        t = np.asarray(time_s, dtype=float)
+        a = (
+            self.epsilon * np.sin(self.omega_rad_s * t)
+            if t.ndim
+            else self.epsilon * math.sin(self.omega_rad_s * float(t))
+        )
         b = 1.0 - 2.0 * a
-        f = a * s * s + b * s
         dfds = 2.0 * a * s + b
+        pf = (dfds - a * s) * s * math.pi  # pi f, with f = a s^2 + b s
+        pr = r * math.pi
         amp = self.amplitude_mps
-        u = -amp * np.sin(np.pi * f) * np.cos(np.pi * r)
-        v = amp * np.cos(np.pi * f) * np.sin(np.pi * r) * dfds
+        u = np.sin(pf)
+        u *= np.cos(pr)
+        u *= -amp
+        v = np.cos(pf)
+        v *= np.sin(pr)
+        v *= dfds
+        v *= amp
         outside = (s < 0.0) | (s > 2.0) | (r < 0.0) | (r > 1.0)
-        u = np.where(outside, np.nan, u)
-        v = np.where(outside, np.nan, v)
+        if outside.any():
+            u = np.where(outside, np.nan, u)
+            v = np.where(outside, np.nan, v)
         if u.ndim == 0:
             return float(u), float(v)
         return u, v
+
+    def _scalar(self, x: float, y: float, t: float) -> tuple[float, float]:
+        """The same formula on Python floats (sequential planners and single drifts)."""
+        s = (x - self.origin_m[0]) / self.length_m
+        r = (y - self.origin_m[1]) / self.length_m
+        if not (0.0 <= s <= 2.0 and 0.0 <= r <= 1.0):
+            return math.nan, math.nan
+        a = self.epsilon * math.sin(self.omega_rad_s * t)
+        b = 1.0 - 2.0 * a
+        f = a * s * s + b * s
+        amp = self.amplitude_mps
+        return (
+            -amp * math.sin(math.pi * f) * math.cos(math.pi * r),
+            amp * math.cos(math.pi * f) * math.sin(math.pi * r) * (2.0 * a * s + b),
+        )
 
     @property
     def bounds_m(self) -> tuple[float, float, float, float]:
@@ -368,21 +504,23 @@ class GridCurrent(_FieldBase):
         if self.interpolation == "cell":
             ix = np.minimum(fx.astype(np.intp), nx - 1)
             iy = np.minimum(fy.astype(np.intp), ny - 1)
-            u = _blend_time(self.u_mps, slices, weights, lambda a: a[..., iy, ix])
-            v = _blend_time(self.v_mps, slices, weights, lambda a: a[..., iy, ix])
+
+            def gather(a: FloatArray, it: np.ndarray) -> FloatArray:
+                return a[it, iy, ix]
+
         else:
             ix = np.minimum(fx.astype(np.intp), nx - 2)
             iy = np.minimum(fy.astype(np.intp), ny - 2)
             tx = fx - ix
             ty = fy - iy
 
-            def bilinear(a: FloatArray) -> FloatArray:
-                return (a[..., iy, ix] * (1.0 - tx) + a[..., iy, ix + 1] * tx) * (1.0 - ty) + (
-                    a[..., iy + 1, ix] * (1.0 - tx) + a[..., iy + 1, ix + 1] * tx
+            def gather(a: FloatArray, it: np.ndarray) -> FloatArray:
+                return (a[it, iy, ix] * (1.0 - tx) + a[it, iy, ix + 1] * tx) * (1.0 - ty) + (
+                    a[it, iy + 1, ix] * (1.0 - tx) + a[it, iy + 1, ix + 1] * tx
                 ) * ty
 
-            u = _blend_time(self.u_mps, slices, weights, bilinear)
-            v = _blend_time(self.v_mps, slices, weights, bilinear)
+        u = _blend_time(self.u_mps, slices, weights, gather)
+        v = _blend_time(self.v_mps, slices, weights, gather)
         bad = outside | ~np.isfinite(weights[0])
         u = np.where(bad, np.nan, u)
         v = np.where(bad, np.nan, v)
@@ -463,22 +601,15 @@ def _blend_time(
     values: FloatArray,
     slices: tuple[np.ndarray, np.ndarray],
     weights: np.ndarray,
-    spatial,
+    gather,
 ) -> FloatArray:
-    """Interpolate ``spatial(values[slice])`` linearly between two time slices."""
+    """Interpolate ``gather(values, slice)`` linearly between two time slices (each point its own pair)."""
     i0, i1 = slices
-    if values.shape[0] == 1:
-        return spatial(values[0]) * np.where(np.isfinite(weights[0]), 1.0, np.nan)
-    if np.ndim(i0) == 0:
-        a0 = spatial(values[int(i0)])
-        a1 = spatial(values[int(i1)])
-    else:
-        sp0 = spatial(values)
-        # spatial() on the full stack returns (nt, ...); pick each element's slices.
-        idx = np.indices(np.shape(i0))
-        a0 = sp0[(i0, *idx)]
-        a1 = sp0[(i1, *idx)]
     w0, w1 = weights
+    if values.shape[0] == 1:
+        return gather(values, np.zeros_like(i0)) * np.where(np.isfinite(w0), 1.0, np.nan)
+    a0 = gather(values, i0)
+    a1 = gather(values, i1)
     return a0 * w0 + np.where(w1 == 0.0, 0.0, a1 * w1)
 
 

@@ -1,21 +1,30 @@
-"""Gridded surface currents from CF-convention NetCDF files (Copernicus Marine, HYCOM, ROMS subsets).
+"""Gridded currents from ocean forecast products: Copernicus Marine, HYCOM, ROMS, as NetCDF or Zarr.
 
-:func:`open_current_netcdf` reads eastward and northward velocity through xarray and returns a
+:func:`open_current_product` reads eastward and northward velocity through xarray and returns a
 :class:`~oceanloc.models.currents.GridCurrent` on a regular metric grid, ready for drift integration:
 
+- a NetCDF file, or a Zarr store (a directory, as ``copernicusmarine subset --file-format zarr`` writes);
 - velocity variables are found by CF ``standard_name`` (``eastward_sea_water_velocity``,
-  ``surface_eastward_sea_water_velocity``, ... and their northward twins) or by the usual names (``uo/vo``,
-  ``water_u/water_v``, ``u/v``), or named explicitly;
+  ``surface_eastward_sea_water_velocity``, ... and their northward twins) or by the products' names
+  (``uo/vo`` for Copernicus Marine, ``water_u/water_v`` for HYCOM, ``u/v`` ...), or named explicitly;
+  packed integers (``scale_factor``, ``add_offset``) and ``_FillValue``/``missing_value`` are decoded;
 - units must be velocities (``m s-1``, ``m/s``, ``cm s-1`` ...); anything else, or no units, is an error
   naming the file and the variable;
-- horizontal coordinates are longitude/latitude (degrees) or projected ``x/y`` (m or km); longitude and
-  latitude grids are resampled once onto a regular grid in a local tangent plane
+- horizontal coordinates are longitude/latitude (degrees, -180..180 or 0..360) or projected ``x/y`` (m or
+  km); longitude and latitude grids are resampled once onto a regular grid in a local tangent plane
   (:class:`~oceanloc.geo.projection.LocalProjection`) with the same resolution;
-- an optional time axis becomes seconds since its first slice; a depth axis is reduced to the level
-  nearest the surface (or a chosen index);
-- land and missing cells (``_FillValue``, ``NaN``) stay ``NaN``: drift stops there and
-  :func:`land_obstacles` turns them into an occupancy grid for the planner. A file without one sea value is
-  an error. Nothing ever becomes a silent zero current.
+- a ROMS subset on its own curvilinear grid (``u``/``v`` on the staggered ``xi_u``/``eta_v`` points,
+  ``lon_rho``/``lat_rho``, ``angle``, ``mask_rho``) is interpolated onto the same kind of regular grid
+  (:mod:`oceanloc.models.currents_roms`); an FVCOM subset (an unstructured triangular mesh) is refused
+  with a message saying so;
+- the time axis becomes seconds since its first slice, optionally cut to a window (``time_window``: the
+  slices covering it); a depth axis is reduced to the level nearest to ``depth_m`` metres (the surface
+  by default) or to a chosen index;
+- an ensemble (a ``member``/``realization``/``number`` dimension) gives one field per member and their mean
+  (:attr:`CurrentProduct.members`);
+- land and missing cells stay ``NaN``: drift stops there and :func:`land_obstacles` turns them into an
+  occupancy grid for the planner. A file without one sea value is an error. Nothing ever becomes a silent
+  zero current.
 
 :func:`write_current_netcdf` writes a :class:`GridCurrent` (or a lon/lat grid) as CF NetCDF, used by the tests
 and to produce example files.
@@ -23,7 +32,7 @@ and to produce example files.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +53,7 @@ EASTWARD_NAMES = (
 NORTHWARD_NAMES = tuple(n.replace("eastward", "northward") for n in EASTWARD_NAMES)
 EASTWARD_VARS = ("uo", "water_u", "u", "U", "ugos", "u_surf")
 NORTHWARD_VARS = ("vo", "water_v", "v", "V", "vgos", "v_surf")
+MEMBER_DIMS = ("member", "realization", "ensemble", "ensemble_member", "number", "ens")
 
 _MPS_UNITS = {
     "m s-1",
@@ -54,6 +64,7 @@ _MPS_UNITS = {
     "meters second-1",
     "meter/second",
     "meters/second",
+    "meter/sec",
     "m.s-1",
     "m sec-1",
     "meter s-1",
@@ -73,19 +84,25 @@ class CurrentProduct:
     Attributes
     ----------
     field : GridCurrent
-        Velocity on a regular metric grid (``NaN`` on land).
+        Velocity on a regular metric grid (``NaN`` on land); the members' mean for an ensemble.
     projection : LocalProjection or None
         The tangent plane used for longitude/latitude products (``None`` for projected ones).
     time_origin : str or None
         The first time slice (ISO 8601) that is time 0 of the field.
     description : str
         What was read: variables, grid, time and depth handling.
+    members : tuple of GridCurrent
+        The ensemble's members on the same grid (empty for a single forecast).
+    layout : str
+        ``"cf"`` (a regular CF grid: Copernicus Marine, HYCOM ...) or ``"roms"``.
     """
 
     field: GridCurrent
     projection: LocalProjection | None
     time_origin: str | None
     description: str
+    members: tuple[GridCurrent, ...] = field(default=())
+    layout: str = "cf"
 
 
 def _import_xarray():
@@ -98,25 +115,83 @@ def _import_xarray():
     return xr
 
 
-def open_current_netcdf(
+def is_zarr_store(path: Path) -> bool:
+    """A Zarr store: a directory with Zarr metadata (v2 ``.zgroup``/``.zattrs`` or v3 ``zarr.json``)."""
+    return path.is_dir() and any((path / name).exists() for name in (".zgroup", ".zattrs", "zarr.json"))
+
+
+def _consolidated(path: Path) -> bool:
+    """Whether a Zarr store carries consolidated metadata (v2 ``.zmetadata``, or v3 ``zarr.json`` with a
+    ``consolidated_metadata`` entry): read it then, else read the arrays' own metadata without a warning."""
+    if (path / ".zmetadata").exists():
+        return True
+    meta = path / "zarr.json"
+    try:
+        import json
+
+        return (
+            meta.exists()
+            and json.loads(meta.read_text(encoding="utf-8")).get("consolidated_metadata") is not None
+        )
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _open_dataset(path: Path):
+    xr = _import_xarray()
+    if is_zarr_store(path):
+        try:
+            import zarr  # noqa: F401
+        except ImportError:  # pragma: no cover - declared dependency
+            raise DataError(
+                f"{path}: reading a Zarr store needs the zarr package (pip install zarr)"
+            ) from None
+        try:
+            return xr.open_zarr(path, consolidated=_consolidated(path))
+        except Exception as exc:
+            raise DataError(f"{path}: cannot read as a Zarr store ({type(exc).__name__}: {exc})") from None
+    if path.is_dir():
+        raise DataError(f"{path}: a directory but not a Zarr store (no .zgroup, .zattrs or zarr.json)")
+    if not path.is_file():
+        raise DataError(f"{path}: current file not found")
+    try:
+        return xr.open_dataset(path, engine="netcdf4")
+    except Exception as exc:
+        raise DataError(f"{path}: cannot read as NetCDF ({type(exc).__name__}: {exc})") from None
+
+
+def open_current_netcdf(path: str | Path, **kwargs) -> CurrentProduct:
+    """:func:`open_current_product` (the name the scenario loader has used since NetCDF only)."""
+    return open_current_product(path, **kwargs)
+
+
+def open_current_product(
     path: str | Path,
     *,
     u_var: str | None = None,
     v_var: str | None = None,
     depth_index: int | None = None,
+    depth_m: float | None = None,
+    time_window: tuple[str, str] | None = None,
     origin_lonlat_deg: tuple[float, float] | None = None,
     interpolation: Interpolation = "linear",
 ) -> CurrentProduct:
-    """Read a CF NetCDF current product (see the module docstring).
+    """Read a current product (see the module docstring).
 
     Parameters
     ----------
     path : str or Path
-        NetCDF file.
+        NetCDF file or Zarr store.
     u_var, v_var : str, optional
         Velocity variable names; found by standard name or usual names when omitted.
     depth_index : int, optional
-        Level of a depth axis; the level nearest the surface when omitted.
+        Level of a depth axis.
+    depth_m : float, optional
+        Depth (metres, positive down) whose nearest level is read; the level nearest the surface when
+        neither this nor ``depth_index`` is given.
+    time_window : (start, end), optional
+        ISO 8601 times: only the slices covering ``[start, end]`` are read (one more on each side where
+        the product has them, so the field interpolates across the whole window).
     origin_lonlat_deg : (lon, lat), optional
         Origin of the local frame for longitude/latitude products; the grid centre when omitted.
     interpolation : {"linear", "cell"}
@@ -125,88 +200,216 @@ def open_current_netcdf(
     Raises
     ------
     DataError
-        Unreadable file, missing variables, wrong units, unusable coordinates, no sea value.
+        Unreadable file, missing variables, wrong units, unusable coordinates, an unsupported grid, a
+        level or window outside the product, no sea value.
     """
-    xr = _import_xarray()
     p = Path(path)
-    if not p.is_file():
-        raise DataError(f"{p}: current file not found")
-    try:
-        ds = xr.open_dataset(p, engine="netcdf4")
-    except Exception as exc:
-        raise DataError(f"{p}: cannot read as NetCDF ({type(exc).__name__}: {exc})") from None
+    if depth_index is not None and depth_m is not None:
+        raise DataError(f"{p}: give a depth index or a depth in metres, not both")
+    ds = _open_dataset(p)
     with ds:
-        u_da = _find_velocity(ds, p, u_var, EASTWARD_NAMES, EASTWARD_VARS, "eastward")
-        v_da = _find_velocity(ds, p, v_var, NORTHWARD_NAMES, NORTHWARD_VARS, "northward")
-        if u_da.dims != v_da.dims:
-            raise DataError(f"{p}: {u_da.name} has dimensions {u_da.dims} but {v_da.name} has {v_da.dims}")
-        u_scale = _velocity_scale(p, u_da)
-        v_scale = _velocity_scale(p, v_da)
-        dims = _classify_dims(ds, p, u_da)
-        notes: list[str] = []
-        if dims["z"] is not None:
-            zname = dims["z"]
-            zvals = (
-                np.asarray(ds[zname].values, dtype=float)
-                if zname in ds.variables
-                else np.arange(ds.sizes[zname])
+        from oceanloc.models.currents_roms import is_fvcom, is_roms, read_roms
+
+        if is_fvcom(ds):
+            raise DataError(
+                f"{p}: an FVCOM subset (velocities on the triangles of an unstructured mesh, 'nele'/'nv') "
+                "is not supported: interpolate it onto a regular longitude/latitude grid first"
             )
-            k = int(np.argmin(np.abs(zvals))) if depth_index is None else depth_index
-            if not 0 <= k < ds.sizes[zname]:
-                raise DataError(f"{p}: depth index {k} outside 0..{ds.sizes[zname] - 1} of '{zname}'")
-            u_da = u_da.isel({zname: k})
-            v_da = v_da.isel({zname: k})
-            notes.append(f"level {k} of '{zname}' ({zvals[k]:g})")
-        tname = dims["t"]
-        order = [d for d in (tname, dims["y"], dims["x"]) if d is not None]
-        u = np.asarray(u_da.transpose(*order).values, dtype=float) * u_scale
-        v = np.asarray(v_da.transpose(*order).values, dtype=float) * v_scale
-        if tname is None:
-            u, v = u[None], v[None]
-            times, t_origin = None, None
-        else:
-            times, t_origin = _time_seconds(ds, p, tname)
-        x_units = str(ds[dims["x"]].attrs.get("units", "")).strip() if dims["x"] in ds.variables else ""
-        y_units = str(ds[dims["y"]].attrs.get("units", "")).strip() if dims["y"] in ds.variables else ""
-        xc = np.asarray(ds[dims["x"]].values, dtype=float) if dims["x"] in ds.variables else None
-        yc = np.asarray(ds[dims["y"]].values, dtype=float) if dims["y"] in ds.variables else None
-        if xc is None or yc is None:
-            raise DataError(f"{p}: horizontal dimensions {dims['y']}, {dims['x']} have no coordinate values")
-        kind = dims["kind"]
-        u_name, v_name = str(u_da.name), str(v_da.name)
+        if is_roms(ds):
+            return read_roms(
+                ds,
+                p,
+                u_var=u_var,
+                v_var=v_var,
+                depth_index=depth_index,
+                depth_m=depth_m,
+                time_window=time_window,
+                origin_lonlat_deg=origin_lonlat_deg,
+                interpolation=interpolation,
+            )
+        return _read_cf(
+            ds, p, u_var, v_var, depth_index, depth_m, time_window, origin_lonlat_deg, interpolation
+        )
+
+
+def _read_cf(ds, p, u_var, v_var, depth_index, depth_m, time_window, origin_lonlat_deg, interpolation):
+    u_da = _find_velocity(ds, p, u_var, EASTWARD_NAMES, EASTWARD_VARS, "eastward")
+    v_da = _find_velocity(ds, p, v_var, NORTHWARD_NAMES, NORTHWARD_VARS, "northward")
+    if u_da.dims != v_da.dims:
+        raise DataError(f"{p}: {u_da.name} has dimensions {u_da.dims} but {v_da.name} has {v_da.dims}")
+    u_scale = _velocity_scale(p, u_da)
+    v_scale = _velocity_scale(p, v_da)
+    dims = _classify_dims(ds, p, u_da)
+    notes: list[str] = []
+    if dims["z"] is not None:
+        k, note = choose_level(ds, p, dims["z"], depth_index, depth_m)
+        u_da = u_da.isel({dims["z"]: k})
+        v_da = v_da.isel({dims["z"]: k})
+        notes.append(note)
+    elif depth_index is not None or depth_m is not None:
+        notes.append("no depth axis: the only level read")
+    tname = dims["t"]
+    times, t_origin = None, None
+    if tname is not None:
+        keep, note = time_slices(ds, p, tname, time_window)
+        if keep is not None:
+            u_da = u_da.isel({tname: keep})
+            v_da = v_da.isel({tname: keep})
+            notes.append(note)
+    elif time_window is not None:
+        raise DataError(f"{p}: a time window was given but '{u_da.name}' has no time axis")
+    order = [d for d in (dims["m"], tname, dims["y"], dims["x"]) if d is not None]
+    u = np.asarray(u_da.transpose(*order).values, dtype=float) * u_scale
+    v = np.asarray(v_da.transpose(*order).values, dtype=float) * v_scale
+    if dims["m"] is None:
+        u, v = u[None], v[None]
+    if tname is None:
+        u, v = u[:, None], v[:, None]
+    else:
+        times, t_origin = _time_seconds(u_da, p, tname)
+    xc, yc, x_units, y_units = _horizontal(ds, p, dims)
+    kind = dims["kind"]
+    u_name, v_name = str(u_da.name), str(v_da.name)
     bad = ~(np.isfinite(u) & np.isfinite(v))
     u[bad] = np.nan
     v[bad] = np.nan
     if bad.all():
         raise DataError(f"{p}: {u_name}/{v_name} hold no finite value (all land or missing)")
+    n_members = u.shape[0]
+    nt = u.shape[1]
+    flat_u = u.reshape(n_members * nt, *u.shape[2:])
+    flat_v = v.reshape(n_members * nt, *v.shape[2:])
     try:
-        regridded = _regrid_lonlat(xc, yc, u, v, origin_lonlat_deg) if kind == "lonlat" else None
+        if kind == "lonlat":
+            x_m, y_m, flat_u, flat_v, projection = _regrid_lonlat(xc, yc, flat_u, flat_v, origin_lonlat_deg)
+            notes.append(
+                f"lon/lat grid resampled to {x_m[1] - x_m[0]:.0f} m about "
+                f"({projection.lon0_deg:.4f}, {projection.lat0_deg:.4f})"
+            )
+        else:
+            xs = _length_scale(x_units, p, dims["x"])
+            ys = _length_scale(y_units, p, dims["y"])
+            x_m, y_m, flat_u, flat_v = _regrid_xy(xc * xs, yc * ys, flat_u, flat_v)
+            projection = None
     except DataError as exc:
         raise DataError(f"{p}: {exc}") from None
-    if regridded is not None:
-        x_m, y_m, u, v, projection = regridded
-        notes.append(
-            f"lon/lat grid resampled to {x_m[1] - x_m[0]:.0f} m about "
-            f"({projection.lon0_deg:.4f}, {projection.lat0_deg:.4f})"
-        )
-    else:
-        xs = _length_scale(x_units, p, dims["x"])
-        ys = _length_scale(y_units, p, dims["y"])
-        try:
-            x_m, y_m, u, v = _regrid_xy(xc * xs, yc * ys, u, v)
-        except DataError as exc:
-            raise DataError(f"{p}: {exc}") from None
-        projection = None
-    land = float(np.mean(np.any(~np.isfinite(u), axis=0)))
-    if land > 0:
-        notes.append(f"{100 * land:.0f}% land/missing cells kept as NaN")
-    field = GridCurrent(x_m=x_m, y_m=y_m, u_mps=u, v_mps=v, time_s=times, interpolation=interpolation)
+    u = flat_u.reshape(n_members, nt, *flat_u.shape[1:])
+    v = flat_v.reshape(n_members, nt, *flat_v.shape[1:])
     desc = f"{p.name}: {u_name}/{v_name} on {len(x_m)} x {len(y_m)} nodes"
     if times is not None:
         desc += f", {len(times)} times from {t_origin}"
+    return assemble_product(
+        x_m, y_m, u, v, times, t_origin, projection, desc, notes, interpolation, layout="cf"
+    )
+
+
+def assemble_product(
+    x_m, y_m, u, v, times, t_origin, projection, desc, notes, interpolation, *, layout: str
+) -> CurrentProduct:
+    """The product from ``(members, time, y, x)`` velocities on a regular metric grid: the members' mean
+    as the field (land where any member has no value), each member on the same grid."""
+    n_members = u.shape[0]
+    land = np.any(~np.isfinite(u) | ~np.isfinite(v), axis=(0, 1))
+    frac = float(np.mean(land))
+    if frac > 0:
+        notes.append(f"{100 * frac:.0f}% land/missing cells kept as NaN")
+    members: tuple[GridCurrent, ...] = ()
+    if n_members > 1:
+        members = tuple(
+            GridCurrent(x_m=x_m, y_m=y_m, u_mps=u[m], v_mps=v[m], time_s=times, interpolation=interpolation)
+            for m in range(n_members)
+        )
+        notes.append(f"ensemble of {n_members} members (field: their mean)")
+        mean_u = np.where(land, np.nan, np.mean(u, axis=0))
+        mean_v = np.where(land, np.nan, np.mean(v, axis=0))
+    else:
+        mean_u, mean_v = u[0], v[0]
+    field_ = GridCurrent(
+        x_m=x_m, y_m=y_m, u_mps=mean_u, v_mps=mean_v, time_s=times, interpolation=interpolation
+    )
     if notes:
         desc += " (" + "; ".join(notes) + ")"
-    return CurrentProduct(field=field, projection=projection, time_origin=t_origin, description=desc)
+    return CurrentProduct(
+        field=field_,
+        projection=projection,
+        time_origin=t_origin,
+        description=desc,
+        members=members,
+        layout=layout,
+    )
+
+
+def choose_level(
+    ds, path: Path, zname: str, depth_index: int | None, depth_m: float | None
+) -> tuple[int, str]:
+    """The index of the level to read on depth axis ``zname`` and a note saying which (see
+    :func:`open_current_product`); depths are positive down whatever the axis' ``positive`` attribute."""
+    n = ds.sizes[zname]
+    if zname in ds.variables:
+        z = np.asarray(ds[zname].values, dtype=float)
+        if str(ds[zname].attrs.get("positive", "down")).lower() == "up" or (z.size > 1 and np.all(z <= 0)):
+            z = -z
+    else:
+        z = np.arange(n, dtype=float)
+    if depth_index is not None:
+        if not 0 <= depth_index < n:
+            raise DataError(f"{path}: depth index {depth_index} outside 0..{n - 1} of '{zname}'")
+        k = depth_index
+    elif depth_m is not None:
+        if zname not in ds.variables:
+            raise DataError(f"{path}: depth axis '{zname}' has no coordinate values; give a depth index")
+        if not (np.isfinite(depth_m) and depth_m >= 0):
+            raise DataError(f"{path}: depth must be a non-negative number of metres, got {depth_m}")
+        if depth_m > np.nanmax(z) + 0.5 * _spacing(z):
+            raise DataError(
+                f"{path}: depth {depth_m:g} m is below the deepest level of '{zname}' ({np.nanmax(z):g} m)"
+            )
+        k = int(np.nanargmin(np.abs(z - depth_m)))
+    else:
+        k = int(np.nanargmin(np.abs(z)))
+    return k, f"level {k} of '{zname}' ({z[k]:g} m)"
+
+
+def _spacing(z: FloatArray) -> float:
+    return float(np.max(np.abs(np.diff(np.sort(z))))) if z.size > 1 else 0.0
+
+
+def time_slices(ds, path: Path, tname: str, window: tuple[str, str] | None) -> tuple[np.ndarray | None, str]:
+    """Indices of the time slices covering ``window`` (one more on each side where there is one), and a
+    note; ``None`` (all slices) without a window."""
+    if window is None:
+        return None, ""
+    values = ds[tname].values
+    if not np.issubdtype(values.dtype, np.datetime64):
+        raise DataError(f"{path}: a time window needs dates on '{tname}' (its units must say 'since ...')")
+    try:
+        lo, hi = (np.datetime64(str(w).strip().rstrip("Z"), "s") for w in window)
+    except ValueError:
+        raise DataError(f"{path}: time window must be two ISO 8601 times, got {window!r}") from None
+    if not lo <= hi:
+        raise DataError(f"{path}: time window starts after it ends ({window[0]} > {window[1]})")
+    t = values.astype("datetime64[s]")
+    first, last = np.datetime_as_string(t[0]), np.datetime_as_string(t[-1])
+    if hi < t[0] or lo > t[-1]:
+        raise DataError(
+            f"{path}: time window {window[0]} .. {window[1]} is outside the product ({first} .. {last})"
+        )
+    i0 = max(int(np.searchsorted(t, lo, side="right")) - 1, 0)
+    i1 = min(int(np.searchsorted(t, hi, side="left")), t.size - 1)
+    keep = np.arange(i0, i1 + 1)
+    if keep.size < 2 and t.size >= 2:
+        keep = np.arange(max(i0 - 1, 0), min(i0 + 2, t.size))
+    return keep, f"time window {window[0]} .. {window[1]}: {keep.size} of {t.size} slices"
+
+
+def _horizontal(ds, p: Path, dims: dict):
+    x_units = str(ds[dims["x"]].attrs.get("units", "")).strip() if dims["x"] in ds.variables else ""
+    y_units = str(ds[dims["y"]].attrs.get("units", "")).strip() if dims["y"] in ds.variables else ""
+    xc = np.asarray(ds[dims["x"]].values, dtype=float) if dims["x"] in ds.variables else None
+    yc = np.asarray(ds[dims["y"]].values, dtype=float) if dims["y"] in ds.variables else None
+    if xc is None or yc is None:
+        raise DataError(f"{p}: horizontal dimensions {dims['y']}, {dims['x']} have no coordinate values")
+    return xc, yc, x_units, y_units
 
 
 def _find_velocity(
@@ -255,7 +458,7 @@ def _length_scale(units: str, path: Path, name: str) -> float:
 
 
 def _classify_dims(ds, path: Path, da) -> dict:
-    out: dict = {"x": None, "y": None, "t": None, "z": None, "kind": None}
+    out: dict = {"x": None, "y": None, "t": None, "z": None, "m": None, "kind": None}
     for dim in da.dims:
         coord = ds[dim] if dim in ds.variables else None
         attrs = coord.attrs if coord is not None else {}
@@ -279,8 +482,10 @@ def _classify_dims(ds, path: Path, da) -> dict:
             out["x"], out["kind"] = dim, out["kind"] or "xy"
         elif sname == "projection_y_coordinate" or (axis == "Y") or lname == "y":
             out["y"] = dim
-        elif sname == "time" or axis == "T" or lname in ("time", "t"):
+        elif sname == "time" or axis == "T" or lname in ("time", "t", "ocean_time"):
             out["t"] = dim
+        elif sname == "realization" or lname in MEMBER_DIMS:
+            out["m"] = dim
         elif (
             sname in ("depth", "altitude", "height")
             or axis == "Z"
@@ -297,6 +502,8 @@ def _classify_dims(ds, path: Path, da) -> dict:
 
 
 def _time_seconds(ds, path: Path, name: str) -> tuple[FloatArray, str]:
+    """Seconds since the first slice of time axis ``name`` of ``ds`` (a dataset or a data array), and that
+    first slice (ISO 8601)."""
     values = ds[name].values
     if np.issubdtype(values.dtype, np.datetime64):
         t = (values - values[0]) / np.timedelta64(1, "s")

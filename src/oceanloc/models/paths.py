@@ -143,6 +143,12 @@ class DriftPath:
         return float(np.sum(self.edge_lengths_m()[self.flight])) if self.n_points > 1 else 0.0
 
     @property
+    def flight_time_s(self) -> float:
+        """Time spent on flight (powered) edges, seconds."""
+        dt = np.diff(self.times_s)
+        return float(np.sum(dt[self.flight])) if self.n_points > 1 else 0.0
+
+    @property
     def drift_time_s(self) -> float:
         dt = np.diff(self.times_s)
         return float(np.sum(dt[~self.flight]))
@@ -167,9 +173,13 @@ class DriftPath:
             points_m=self.points_m[keep], times_s=self.times_s[keep], flight=self.flight[keep[1:]]
         )
 
-    def energy(self, budget: EnergyBudget) -> PathEnergy:
-        """Energy account (IV.14): distance flown, solar income and loads over the duration."""
-        flight = float(budget.flight_energy_wh(self.flight_distance_m))
+    def energy(self, budget: EnergyBudget, *, through_water: bool = False) -> PathEnergy:
+        """Energy account (IV.14): distance flown (or, for powered legs through the water, the power times
+        the powered time), solar income and loads over the duration."""
+        if through_water:
+            flight = budget.flight_power_w * self.flight_time_s / 3600.0
+        else:
+            flight = float(budget.flight_energy_wh(self.flight_distance_m))
         solar = float(budget.solar_energy_wh(self.duration_s))
         loads = float(budget.load_energy_wh(self.duration_s))
         return PathEnergy(

@@ -20,8 +20,10 @@ set; it is written from those descriptions with pymavlink, not from ArduPilot's 
   per item (re-requested after a timeout) -> ``MISSION_ITEM_INT`` -> ``MISSION_ACK``; download
   ``MISSION_REQUEST_LIST``; ``MISSION_CLEAR_ALL``; ``MISSION_SET_CURRENT``. Item 0 is home (ArduPilot
   overwrites it and starts AUTO at item 1). In AUTO each ``MAV_CMD_NAV_WAYPOINT`` is driven to and
-  ``MISSION_ITEM_REACHED`` sent within the waypoint radius; ``MISSION_CURRENT`` at 1 Hz and on change.
-  At the end of the mission the boat switches to HOLD (``MIS_DONE_BEHAVE = 0``, Hold).
+  ``MISSION_ITEM_REACHED`` sent within the waypoint radius; a ``MAV_CMD_NAV_DELAY`` stops the motors for
+  ``param1`` seconds (the boat drifts, as in HOLD), then the mission goes on; other commands are skipped;
+  ``MISSION_CURRENT`` at 1 Hz and on change. At the end of the mission the boat switches to HOLD
+  (``MIS_DONE_BEHAVE = 0``, Hold).
 - HOLD and MANUAL (no RC input here): no thrust; the boat slows and drifts with the current, as the Rover
   documentation warns boats do in Hold. LOITER holds station where it was entered.
 - Telemetry at set rates (simulated time): GLOBAL_POSITION_INT 5 Hz, ATTITUDE 10 Hz, VFR_HUD 4 Hz,
@@ -339,6 +341,7 @@ class BoatSimulator:
         self._target: tuple[float, float] | None = None
         self._mission: list = []
         self._mission_seq = 0
+        self._delay_until: float | None = None
         self._upload: _Upload | None = None
         self._ignore_once = set(ignore_items_once)
         self._request_retry_s = float(request_retry_s)
@@ -485,6 +488,8 @@ class BoatSimulator:
                 dist = math.hypot(target[0] - self._state.east_m, target[1] - self._state.north_m)
                 if dist <= self.params.wp_radius_m:
                     self._advance_mission_locked()
+            elif mode == MODE_AUTO and self._delay_until is not None and self._state.t_s >= self._delay_until:
+                self._advance_mission_locked()
 
     # -- sending ----------------------------------------------------------------------------------
 
@@ -859,10 +864,16 @@ class BoatSimulator:
 
     def _target_from_mission_locked(self) -> None:
         """Skip non-navigation items; set the target to the current waypoint (or finish the mission)."""
+        self._delay_until = None
         while self._mission_seq < len(self._mission):
             it = self._mission[self._mission_seq]
             if it.command == mavlink.MAV_CMD_NAV_WAYPOINT:
                 self._target = self._local(it.x * 1e-7, it.y * 1e-7)
+                return
+            if it.command == mavlink.MAV_CMD_NAV_DELAY and it.param1 >= 0:
+                # Rover's NAV_DELAY: stop (a boat drifts) for param1 seconds, then go on.
+                self._target = None
+                self._delay_until = self._state.t_s + float(it.param1)
                 return
             self._mission_seq += 1
         self._finish_mission_locked()

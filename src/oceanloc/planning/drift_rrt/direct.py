@@ -40,10 +40,21 @@ def direct_flight_path(problem: DriftProblem) -> tuple[DriftPath | None, str]:
         points = start[None, :] + frac * (goal - start)[None, :]
         if k > 1 and not bool(np.all(space.is_valid(points[1:-1]))):
             continue
-        if space.flights_avoid_obstacles and not bool(np.all(space.flight_valid(points[:-1], points[1:]))):
-            reason = "it crosses a no-fly obstacle"
+        if (space.flights_avoid_obstacles or problem.in_water) and not bool(
+            np.all(space.flight_valid(points[:-1], points[1:]))
+        ):
+            reason = "it crosses a no-fly obstacle" if not problem.in_water else "it crosses land"
             continue
-        times = problem.t0_s + frac[:, 0] * dist / speed
+        if not problem.in_water:
+            times = problem.t0_s + frac[:, 0] * dist / speed
+        else:
+            times = [problem.t0_s]
+            for i in range(k):
+                tau, ok = problem.leg_times_s(points[i], points[i + 1], times[-1])
+                if not bool(ok):
+                    return None, "the current does not let the vehicle hold the straight course"
+                times.append(times[-1] + float(tau))
+            times = np.asarray(times)
         return DriftPath(points_m=points, times_s=times, flight=np.ones(k, dtype=bool)), ""
     return None, reason
 
@@ -81,7 +92,7 @@ def prefer_direct(
     if measure is None:
 
         def measure(p: DriftProblem, path: DriftPath) -> float:
-            return float(p.energy.flight_energy_wh(path.flight_distance_m))
+            return p.powered_energy_wh(path)
 
     direct, why = direct_flight_path(problem)
     direct_wh = problem.direct_flight_wh
@@ -95,7 +106,8 @@ def prefer_direct(
             return dataclasses.replace(result, message=result.message + note)
         return result
     direct_measure = measure(problem, direct)
-    if result.success and plan_measure <= direct_measure + 1e-9:
+    if not math.isfinite(direct_measure) or (result.success and plan_measure <= direct_measure + 1e-9):
+        # (A direct flight that misses a deadline is no plan.)
         return result
     was = (
         f"the planner's plan ({result.flight_energy_wh:.2f} Wh) costs more"
@@ -106,7 +118,7 @@ def prefer_direct(
         result,
         status=PlanStatus.EXACT,
         path=direct,
-        flight_energy_wh=float(problem.energy.flight_energy_wh(direct.flight_distance_m)),
+        flight_energy_wh=problem.powered_energy_wh(direct),
         solutions=max(result.solutions, 1),
         cost=direct_measure if own_cost else math.nan,
         direct_chosen=True,

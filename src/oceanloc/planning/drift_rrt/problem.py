@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal, TypeAlias, get_args
 
 import numpy as np
 
@@ -17,10 +17,15 @@ from oceanloc._typing import BoolArray, FloatArray, IntArray
 from oceanloc.errors import ConfigError
 from oceanloc.models.energy import EnergyBudget
 from oceanloc.models.paths import DriftPath
+from oceanloc.models.powered import Propulsion, check_propulsion, leg_times_s
 from oceanloc.planning.drift_rrt.objective import HdopTerm
 from oceanloc.planning.drift_rrt.propagation import DriftPropagator
 from oceanloc.planning.drift_rrt.space import DriftSpace
 from oceanloc.planning.status import PlanStatus
+
+Objective: TypeAlias = Literal["energy", "time"]
+"""``energy``: flight energy plus the price of time (Wh); ``time``: the arrival time (s after the start)."""
+OBJECTIVES: tuple[str, ...] = get_args(Objective)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -53,6 +58,16 @@ class DriftProblem:
         Price of time in the oceanloc planners' objective, Wh per hour of path: with 0 (the thesis, which
         reports flight energy only) drifting is free however long it takes; in closed circulations
         (gyres) a small price stops plans that circle for days to save a few watt-hours.
+    objective : {"energy", "time"}
+        What the oceanloc planner minimizes: flight energy plus the price of time (Wh), or the time to
+        reach the goal (s).
+    max_duration_s : float or None
+        Deadline: the plan must reach the goal within this many seconds of ``t0_s`` (energy with a
+        deadline); ``None``: no deadline.
+    propulsion : {"air", "water"}
+        What powered legs move through (:mod:`oceanloc.models.powered`): the air (a flying drifter, legs
+        unaffected by the current, the thesis) or the water (a boat, carried by the current while it holds
+        its course; obstacles are then land it cannot cross).
     """
 
     space: DriftSpace
@@ -66,6 +81,9 @@ class DriftProblem:
     max_leg_m: float | None = None
     t0_s: float = 0.0
     time_weight_wh_per_h: float = 0.0
+    objective: Objective = "energy"
+    max_duration_s: float | None = None
+    propulsion: Propulsion = "air"
 
     def __post_init__(self) -> None:
         start = np.asarray(self.start_m, dtype=float).reshape(2)
@@ -82,6 +100,15 @@ class DriftProblem:
             raise ConfigError(f"time weight must not be negative, got {self.time_weight_wh_per_h}")
         if self.max_leg_m is not None and not self.max_leg_m > 0:
             raise ConfigError(f"max_leg_m must be positive or None, got {self.max_leg_m}")
+        if self.objective not in OBJECTIVES:
+            raise ConfigError(f"objective must be one of {', '.join(OBJECTIVES)}; got '{self.objective}'")
+        if self.max_duration_s is not None and not (
+            self.max_duration_s > 0 and math.isfinite(self.max_duration_s)
+        ):
+            raise ConfigError(
+                f"max_duration_s must be positive and finite or None, got {self.max_duration_s}"
+            )
+        check_propulsion(self.propulsion)
         object.__setattr__(self, "start_m", start)
         object.__setattr__(self, "goal_m", goal)
 
@@ -96,13 +123,72 @@ class DriftProblem:
         return self.time_weight_wh_per_h / 3600.0 / self.energy.flight_wh_per_m
 
     @property
+    def deadline_s(self) -> float | None:
+        """Latest arrival time (same clock as ``t0_s``), or ``None``."""
+        return None if self.max_duration_s is None else self.t0_s + self.max_duration_s
+
+    @property
+    def end_s(self) -> float:
+        """End of the planning window: the deadline, or the start plus the horizon."""
+        return self.t0_s + (self.horizon_s if self.max_duration_s is None else self.max_duration_s)
+
+    @property
+    def in_water(self) -> bool:
+        return self.propulsion == "water"
+
+    @property
+    def powered_rate(self) -> float:
+        """Objective per second of powered travel, beyond the price of time: Wh/s (energy) or 0 (time)."""
+        return self.energy.flight_power_w / 3600.0 if self.objective == "energy" else 0.0
+
+    @property
+    def time_rate(self) -> float:
+        """Objective per second of the plan's duration: the price of time in Wh/s (energy), or 1 (time)."""
+        return self.time_weight_wh_per_h / 3600.0 if self.objective == "energy" else 1.0
+
+    def leg_times_s(self, start_m, end_m, t0_s) -> tuple[FloatArray, BoolArray]:
+        """Times of straight powered legs (:func:`oceanloc.models.powered.leg_times_s`) and feasibility."""
+        return leg_times_s(
+            self.propulsion,
+            self.propagator.field,
+            start_m,
+            end_m,
+            t0_s,
+            self.energy.flight_speed_mps,
+        )
+
+    def powered_energy_wh(self, path: DriftPath) -> float:
+        """Energy of a path's powered legs (IV.14): by distance in the air, by powered time in the water."""
+        if self.propulsion == "air":
+            return float(self.energy.flight_energy_wh(path.flight_distance_m))
+        return self.energy.flight_power_w * path.flight_time_s / 3600.0
+
+    def objective_of(self, path: DriftPath) -> float:
+        """The planner's objective of ``path``: Wh for ``energy`` (flight plus the price of time), seconds
+        for ``time``; ``inf`` if it arrives after the deadline."""
+        deadline = self.deadline_s
+        if deadline is not None and path.n_points and path.times_s[-1] > deadline + 1e-6:
+            return math.inf
+        if self.objective == "time":
+            return path.duration_s
+        return self.powered_energy_wh(path) + self.time_weight_wh_per_h * path.duration_s / 3600.0
+
+    @property
+    def objective_unit(self) -> str:
+        return "s" if self.objective == "time" else "Wh"
+
+    @property
     def direct_flight_m(self) -> float:
         return float(np.linalg.norm(self.goal_m - self.start_m))
 
     @property
     def direct_flight_wh(self) -> float:
-        """Baseline energy: fly straight from start to goal (the thesis' red line, 49.5 Wh)."""
-        return float(self.energy.flight_energy_wh(self.direct_flight_m))
+        """Baseline energy: fly straight from start to goal (the thesis' red line, 49.5 Wh); in the water,
+        the straight powered leg begun at the start time (``inf`` if the current does not allow it)."""
+        if self.propulsion == "air":
+            return float(self.energy.flight_energy_wh(self.direct_flight_m))
+        tau, _ = self.leg_times_s(self.start_m, self.goal_m, self.t0_s)
+        return self.energy.flight_power_w * float(tau) / 3600.0
 
     @property
     def starts_in_goal(self) -> bool:

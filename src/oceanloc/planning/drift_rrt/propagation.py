@@ -134,12 +134,13 @@ class DriftPropagator:
         goal_m: ArrayLike,
         goal_tolerance_m: float,
         stride: int = 1,
-        t0_s: float = 0.0,
+        t0_s: float | FloatArray = 0.0,
     ) -> Rollout:
         """Drift ``(P, 2)`` particles for up to ``n_steps`` steps, all at once.
 
         Each step advances only the particles still valid (the batch shrinks as particles stop), so the
         cost is proportional to the total number of valid steps. Particles starting invalid stop at once.
+        ``t0_s`` is one start time or one per particle ``(P,)`` (each then drifts on its own clock).
         """
         if stride < 1:
             raise ConfigError(f"rollout stride must be at least 1, got {stride}")
@@ -166,10 +167,12 @@ class DriftPropagator:
         stepper = _CellStepper.build(self, space) or _GenericStepper(self, space)
         state = stepper.start(ax, ay)
         dt = self.dt_s
+        clocks = np.ndim(t0_s) > 0
+        at = np.broadcast_to(np.asarray(t0_s, dtype=float), (n,))[active] if clocks else t0_s
         for k in range(1, n_steps + 1):
             if active.size == 0:
                 break
-            xn, yn, ok, state = stepper.step(ax, ay, state, t0_s + (k - 1) * dt)
+            xn, yn, ok, state = stepper.step(ax, ay, state, at + (k - 1) * dt)
             if not ok.all():
                 dead = ~ok
                 end_step[active[dead]] = k - 1
@@ -178,6 +181,8 @@ class DriftPropagator:
                 yn = yn[ok]
                 ab = ab[ok]
                 state = state[ok] if state is not None else None
+                if clocks:
+                    at = at[ok]
             ax, ay = xn, yn
             ex = ax - gx
             ey = ay - gy

@@ -33,7 +33,7 @@ class Resimulation:
         The re-simulated path (vertex times follow the clock: drift steps and flight distance / speed).
     flight_distance_m : float
     flight_energy_wh : float
-        Energy of the flights (IV.14).
+        Energy of the flights (IV.14); in the water, the power times the powered time.
     arrival_s : float
         Time at the end of the path, seconds (same time frame as ``problem.t0_s``).
     end_m : (2,) float
@@ -43,7 +43,8 @@ class Resimulation:
         Largest distance between a planned vertex and its re-simulated counterpart (0 for a plan drifted
         in time correctly).
     blocked : bool
-        A drift left the valid space (or the field's span) before its planned number of steps.
+        A drift left the valid space (or the field's span) before its planned number of steps, or (in the
+        water) the current did not let a powered leg hold its course.
     finished_by_flight : bool
         A straight flight to the goal was appended because the re-simulated path missed the goal disk.
     """
@@ -117,8 +118,12 @@ def resimulate_plan(problem: DriftProblem, path: DriftPath, *, finish_to_goal: b
         if is_flight:
             for k in range(a + 1, b + 1):
                 target = planned[k]
-                d = float(np.linalg.norm(target - pos))
-                t += d / speed
+                if problem.propulsion == "air":
+                    t += float(np.linalg.norm(target - pos)) / speed
+                else:
+                    tau, ok = problem.leg_times_s(pos, target, t)
+                    blocked = blocked or not bool(ok)
+                    t += float(tau) if bool(ok) else 0.0
                 pos = target.copy()
                 points.append(pos[None])
                 times.append(t)
@@ -139,7 +144,8 @@ def resimulate_plan(problem: DriftProblem, path: DriftPath, *, finish_to_goal: b
     reaches = bool(np.linalg.norm(pos - goal) < problem.goal_tolerance_m or np.allclose(pos, goal))
     finished = False
     if finish_to_goal and not reaches:
-        t += float(np.linalg.norm(goal - pos)) / speed
+        tau, ok = problem.leg_times_s(pos, goal, t)
+        t += float(tau) if bool(ok) else float(np.linalg.norm(goal - pos)) / speed
         pos = goal.copy()
         points.append(pos[None])
         times.append(t)
@@ -152,7 +158,7 @@ def resimulate_plan(problem: DriftProblem, path: DriftPath, *, finish_to_goal: b
     return Resimulation(
         path=out,
         flight_distance_m=flown,
-        flight_energy_wh=float(problem.energy.flight_energy_wh(flown)),
+        flight_energy_wh=problem.powered_energy_wh(out),
         arrival_s=t,
         end_m=pos,
         reaches_goal=reaches,

@@ -24,6 +24,7 @@ __all__ = [
     "dillard_fields_table",
     "dillard_notes",
     "dillard_table",
+    "ensemble_table",
     "following_table",
     "plan_table",
     "swap_notes",
@@ -78,8 +79,40 @@ def plan_table(plan: ScenarioPlan) -> Table:
             f"solar +{account.solar_wh:.1f}, loads -{account.loads_wh:.1f}, "
             f"flight -{account.flight_wh:.1f}: net {account.net_wh:+.1f}",
         )
+    if res.path is not None:
+        objective = (
+            "time to goal (s)" if problem.objective == "time" else "objective: flight + time price (Wh)"
+        )
+        deadline = "" if problem.max_duration_s is None else f", deadline {problem.max_duration_s / 3600:g} h"
+        table.add_row(objective + deadline, f"{res.cost:.2f}" if math.isfinite(res.cost) else "-")
+        if plan.scenario.time_origin is not None:
+            table.add_row("start", f"{plan.scenario.time_origin} + {problem.t0_s / 3600:.2f} h")
     table.add_row("compute (ms)", f"{1e3 * res.compute_s:.1f}")
     table.add_row("units", problem.energy.convention)
+    return table
+
+
+def ensemble_table(plan: ScenarioPlan) -> Table | None:
+    """Each candidate plan of an ensemble (made in the mean or in one member) flown in every member: its
+    expected objective and the spread of its flight energy; the chosen plan is marked."""
+    ens = plan.ensemble
+    if ens is None:
+        return None
+    table = Table(title=f"Ensemble of {ens.n_members} members: every candidate flown in every member")
+    table.add_column("plan made in")
+    table.add_column(f"expected objective ({ens.unit})", justify="right")
+    table.add_column("flight energy mean +- std (Wh)", justify="right")
+    table.add_column("min - max (Wh)", justify="right")
+    for row in ens.spread():
+        mark = " (chosen)" if row["chosen"] else ""
+        table.add_row(
+            row["candidate"] + mark,
+            f"{row['objective_mean']:.2f}" if math.isfinite(row["objective_mean"]) else "-",
+            _pm(row["energy_wh_mean"], row["energy_wh_std"]),
+            f"{row['energy_wh_min']:.2f} - {row['energy_wh_max']:.2f}"
+            if math.isfinite(row["energy_wh_max"])
+            else "-",
+        )
     return table
 
 
