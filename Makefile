@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test test-slow bench lint install system gnatss setup clean
+.PHONY: demo test test-slow test-loaded bench lint install system gnatss setup clean
 
 # GNATSS (the community's GNSS-A package) is the oracle of the GNSS-A tests and benchmark. Its pins
 # (xarray<2025, pydantic==2.8.2, numba) clash with ours, so it gets its own environment, built once
@@ -47,6 +47,10 @@ setup:
 
 test: setup
 	$(BIN)/python -m pytest -m "not slow" -n auto --dist loadfile
+
+# The suite under background load (BUSY spinning processes, ROUNDS runs in a row): it must pass every time.
+test-loaded: setup
+	BUSY=$(or $(BUSY),4) ROUNDS=$(or $(ROUNDS),3) bash scripts/test-under-load.sh
 
 test-slow: setup
 	$(BIN)/python -m pytest -m slow
