@@ -90,3 +90,38 @@ def test_gnssa_ping_residuals_load_offline(sources, tmp_path):
     pings = json.loads(got.value)["plots"][f"series-{len(rep.series) - 1}"]
     assert pings["names"][-2:] == ["excluded: elevation below 20 deg", "excluded: outlier"]
     assert pings["points"] == [18, 19, 1, 2] and pings["markers"] == [18, 19, 1, 2]
+
+
+def test_markup_in_record_text_never_becomes_a_link(tmp_path):
+    """A transponder id or file name holding ``<a href>`` once became a clickable link in a legend: plotly
+    renders a subset of HTML in names and titles. Every label now reaches plotly escaped."""
+    import numpy as np
+
+    from oceanloc.report.html.model import Estimate, MapLayers, Report, Series
+
+    evil = '<a href="https://example.invalid/">T1</a><span style="font-size:90px">x</span>'
+    est = Estimate(label=evil, east_m=1.0, north_m=2.0, semi_major_m=0.5, semi_minor_m=0.2, angle_rad=0.3)
+    series = Series(
+        title=f"ranges of {evil}",
+        x_label=evil,
+        y_label="range (m)",
+        lines=((evil, np.arange(3.0), np.arange(3.0), "lines", None),),
+    )
+    rep = Report(
+        kind="journal",
+        title=evil,
+        map=MapLayers(track_en_m=np.array([[0.0, 0.0], [5.0, 5.0]]), track_label=evil, estimates=(est,)),
+        series=(series,),
+    )
+    page = tmp_path / "evil.html"
+    page.write_text(render_html(rep), encoding="utf-8")
+    probe = """JSON.stringify({
+      links: document.querySelectorAll('.plotly-graph-div a').length,
+      styled: Array.from(document.querySelectorAll('.plotly-graph-div tspan')).filter(
+        t => (t.getAttribute('style') || '').includes('90px')).length,
+      legend: Array.from(document.querySelectorAll('.legendtext')).map(t => t.textContent)})"""
+    got = load_page(page, probe, ready=PLOTLY_READY, timeout_s=30.0)
+    dom = json.loads(got.value)
+    assert dom["links"] == 0 and dom["styled"] == 0
+    assert any(text.startswith('<a href="https://example.invalid/">T1</a>') for text in dom["legend"])
+    assert got.console_errors == []

@@ -449,9 +449,58 @@ def series_figure(s: Series) -> go.Figure:
     return fig
 
 
+_PLOTLY_TAGS = ("br", "b", "i", "em", "sup", "sub")
+"""The markup plotly renders that a label may keep: line breaks and emphasis, no links, no styles."""
+
+
+def plotly_text(text: str) -> str:
+    """``text`` made safe for a plotly label: escaped, then only the bare tags of :data:`_PLOTLY_TAGS`
+    restored. Plotly renders a subset of HTML in names, titles and annotations (links included), so a
+    transponder id or file name holding ``<a href=...>`` would become a link in the legend."""
+    out = html.escape(text, quote=False)
+    for tag in _PLOTLY_TAGS:
+        out = out.replace(f"&lt;{tag}&gt;", f"<{tag}>").replace(f"&lt;/{tag}&gt;", f"</{tag}>")
+    return out
+
+
+def _safe(value: object) -> object:
+    if isinstance(value, str):
+        return plotly_text(value)
+    if isinstance(value, list | tuple | np.ndarray) and len(value) and isinstance(value[0], str):
+        return [plotly_text(v) if isinstance(v, str) else v for v in value]
+    return value
+
+
+def sanitize_figure(fig: go.Figure) -> go.Figure:
+    """Every text of ``fig`` that plotly renders as markup (trace names and texts, titles, axis titles,
+    annotations) passed through :func:`plotly_text`; the one exit from figures to pages applies it."""
+    for trace in fig.data:
+        for key in ("name", "text", "hovertext"):
+            if key in trace and trace[key] is not None:
+                trace[key] = _safe(trace[key])
+        title = getattr(trace, "legendgrouptitle", None)
+        if title is not None and title.text:
+            title.text = plotly_text(title.text)
+    layout = fig.layout
+    if layout.title and layout.title.text:
+        layout.title.text = plotly_text(layout.title.text)
+    for name in dir(layout):
+        if name.startswith(("xaxis", "yaxis")):
+            axis = getattr(layout, name, None)
+            if axis is not None and getattr(axis, "title", None) is not None and axis.title.text:
+                axis.title.text = plotly_text(axis.title.text)
+    for note in layout.annotations or ():
+        if note.text:
+            note.text = plotly_text(note.text)
+    return fig
+
+
 def figure_div(fig: go.Figure, div_id: str) -> str:
-    """A figure as a ``<div>`` and its ``Plotly.newPlot`` call (the bundle is in the head)."""
-    return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id, config=_PLOT_CONFIG)
+    """A figure as a ``<div>`` and its ``Plotly.newPlot`` call (the bundle is in the head), its labels
+    made safe (:func:`sanitize_figure`)."""
+    return sanitize_figure(fig).to_html(
+        full_html=False, include_plotlyjs=False, div_id=div_id, config=_PLOT_CONFIG
+    )
 
 
 def _table(header: tuple[str, ...], rows: tuple[tuple[str, ...], ...], table_id: str) -> str:
